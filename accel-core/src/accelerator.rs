@@ -1,0 +1,187 @@
+//! The interface every acceleration structure offers, and its reports.
+
+use crate::{Aabb, Hit, QueryError, Ray, Real};
+use core::fmt;
+use std::time::Duration;
+
+/// Work done by one query: what a heat map shows per pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalCounters {
+    /// Cells (grids) or nodes (trees) visited.
+    pub nodes: u64,
+    /// Primitive intersection or overlap tests run.
+    pub prims: u64,
+}
+
+impl TraversalCounters {
+    /// Adds another query's counts.
+    pub fn add(&mut self, o: &Self) {
+        self.nodes += o.nodes;
+        self.prims += o.prims;
+    }
+}
+
+/// Counts traversal work, or not: the traversal code is generic over it, and
+/// `()` compiles the counting away.
+pub trait CostCounter {
+    /// One cell or node visited.
+    fn node(&mut self);
+    /// One primitive tested.
+    fn prim(&mut self);
+}
+
+impl CostCounter for () {
+    #[inline(always)]
+    fn node(&mut self) {}
+    #[inline(always)]
+    fn prim(&mut self) {}
+}
+
+impl CostCounter for TraversalCounters {
+    #[inline]
+    fn node(&mut self) {
+        self.nodes += 1;
+    }
+    #[inline]
+    fn prim(&mut self) {
+        self.prims += 1;
+    }
+}
+
+/// Build and shape statistics of an accelerator.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AccelStats {
+    /// Short name of the structure ("grid", "octree", "kdtree", "brute").
+    pub kind: &'static str,
+    /// Number of primitives indexed.
+    pub primitives: usize,
+    /// Wall-clock build time.
+    pub build_time: Duration,
+    /// Heap bytes owned by the structure (not counting the primitives).
+    pub bytes: usize,
+    /// Cells (grids) or nodes (trees), inner ones included.
+    pub nodes: usize,
+    /// Cells or leaves that can hold references.
+    pub leaves: usize,
+    /// Of those, the ones holding none.
+    pub empty_leaves: usize,
+    /// Primitive references stored (a primitive in three cells counts three).
+    pub references: usize,
+    /// The most references in one cell or leaf.
+    pub max_leaf_references: usize,
+    /// Structure-specific figures (resolution, depth, SAH cost, ...).
+    pub extra: Vec<(&'static str, f64)>,
+}
+
+impl AccelStats {
+    /// Mean references per non-empty cell or leaf.
+    #[must_use]
+    pub fn mean_references_per_nonempty_leaf(&self) -> f64 {
+        let full = self.leaves - self.empty_leaves;
+        if full == 0 {
+            0.0
+        } else {
+            self.references as f64 / full as f64
+        }
+    }
+
+    /// Bytes per primitive (0 for an empty structure).
+    #[must_use]
+    pub fn bytes_per_primitive(&self) -> f64 {
+        if self.primitives == 0 {
+            0.0
+        } else {
+            self.bytes as f64 / self.primitives as f64
+        }
+    }
+
+    /// The value of a structure-specific figure.
+    #[must_use]
+    pub fn extra(&self, name: &str) -> Option<f64> {
+        self.extra.iter().find(|(n, _)| *n == name).map(|&(_, v)| v)
+    }
+}
+
+impl fmt::Display for AccelStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: {} prims, build {:.2} ms, {:.2} MiB ({:.1} B/prim), {} nodes, {} leaves ({} empty), \
+             {} refs (max {}, mean {:.2} per non-empty leaf)",
+            self.kind,
+            self.primitives,
+            self.build_time.as_secs_f64() * 1e3,
+            self.bytes as f64 / (1024.0 * 1024.0),
+            self.bytes_per_primitive(),
+            self.nodes,
+            self.leaves,
+            self.empty_leaves,
+            self.references,
+            self.max_leaf_references,
+            self.mean_references_per_nonempty_leaf(),
+        )?;
+        for (name, value) in &self.extra {
+            write!(f, ", {name} {value}")?;
+        }
+        Ok(())
+    }
+}
+
+/// A structure that answers ray and region queries over a primitive set.
+///
+/// # The equivalence promise
+/// For any finite scene and valid ray, [`Accelerator::intersect`] returns the
+/// same hit as [`crate::BruteForce`], bit for bit: the smallest `t`, ties to the
+/// lowest primitive index, the same `u`, `v`. [`Accelerator::occluded`] equals
+/// `intersect(ray)?.is_some()`, and [`Accelerator::query_region`] returns
+/// exactly the primitives whose [`crate::PrimitiveSet::overlaps_box`] accepts the region.
+///
+/// # Errors
+/// Every query refuses a ray that fails [`Ray::validate`] (or a non-finite
+/// region) with the [`QueryError`] naming the problem. A ray with an empty
+/// interval (`t_min > t_max`) is valid and hits nothing.
+pub trait Accelerator<T: Real>: Sync {
+    /// Bounds of everything indexed (empty if nothing is).
+    fn bounds(&self) -> Aabb<T>;
+
+    /// The nearest hit in `[t_min, t_max]`.
+    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError>;
+
+    /// Whether any primitive is hit in `[t_min, t_max]`: shadow rays; stops at
+    /// the first hit found.
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError>;
+
+    /// [`Accelerator::intersect`] that also counts the work done.
+    fn intersect_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<Option<Hit<T>>, QueryError>;
+
+    /// [`Accelerator::occluded`] that also counts the work done.
+    fn occluded_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<bool, QueryError>;
+
+    /// Every primitive that overlaps the closed box `region`, ascending and
+    /// without repeats (an empty region gives none).
+    fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError>;
+
+    /// Build and shape statistics.
+    fn stats(&self) -> AccelStats;
+}
+
+/// Checks a region for [`Accelerator::query_region`].
+///
+/// # Errors
+/// [`QueryError::NonFiniteRegion`] for a NaN or infinite corner.
+#[inline]
+pub fn validate_region<T: Real>(region: &Aabb<T>) -> Result<(), QueryError> {
+    if region.is_finite() {
+        Ok(())
+    } else {
+        Err(QueryError::NonFiniteRegion)
+    }
+}

@@ -1,0 +1,131 @@
+//! The reference: test every primitive.
+
+use crate::accelerator::validate_region;
+use crate::{
+    Aabb, AccelStats, Accelerator, BuildError, CostCounter, Hit, PreparedRay, PrimitiveSet,
+    QueryError, Ray, Real, TraversalCounters, primitive_bounds,
+};
+use std::time::Instant;
+
+/// Tests every primitive for every query. Slow, obviously right, and the
+/// reference that every other accelerator must match bit for bit.
+#[derive(Debug)]
+pub struct BruteForce<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
+    prims: &'a P,
+    bounds: Aabb<T>,
+    stats: AccelStats,
+}
+
+impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> BruteForce<'a, T, P> {
+    /// Checks the primitives (finite bounds) and wraps them.
+    ///
+    /// # Errors
+    /// [`BuildError::NonFinitePrimitive`] or [`BuildError::TooManyPrimitives`].
+    pub fn new(prims: &'a P) -> Result<Self, BuildError> {
+        let start = Instant::now();
+        let (_, bounds) = primitive_bounds(prims)?;
+        let stats = AccelStats {
+            kind: "brute",
+            primitives: prims.len(),
+            build_time: start.elapsed(),
+            leaves: 1,
+            nodes: 1,
+            empty_leaves: usize::from(prims.is_empty()),
+            references: prims.len(),
+            max_leaf_references: prims.len(),
+            ..AccelStats::default()
+        };
+        Ok(Self {
+            prims,
+            bounds,
+            stats,
+        })
+    }
+
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        c: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        ray.validate()?;
+        if ray.is_empty_interval() {
+            return Ok(None);
+        }
+        c.node();
+        let pr = PreparedRay::new(*ray);
+        let mut best: Option<Hit<T>> = None;
+        for i in 0..self.prims.len() {
+            c.prim();
+            let t_max = best.map_or(ray.t_max, |b| b.t);
+            if let Some(h) = self.prims.intersect(i, &pr, t_max) {
+                let h = Hit::new(i as u32, h);
+                // Ascending indices: a tie never replaces the earlier hit.
+                if best.is_none_or(|b| h.t < b.t) {
+                    best = Some(h);
+                }
+            }
+        }
+        Ok(best)
+    }
+
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, c: &mut C) -> Result<bool, QueryError> {
+        ray.validate()?;
+        if ray.is_empty_interval() {
+            return Ok(false);
+        }
+        c.node();
+        let pr = PreparedRay::new(*ray);
+        for i in 0..self.prims.len() {
+            c.prim();
+            if self.prims.intersect(i, &pr, ray.t_max).is_some() {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for BruteForce<'_, T, P> {
+    fn bounds(&self) -> Aabb<T> {
+        self.bounds
+    }
+
+    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, &mut ())
+    }
+
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
+        self.any(ray, &mut ())
+    }
+
+    fn intersect_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, counters)
+    }
+
+    fn occluded_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<bool, QueryError> {
+        self.any(ray, counters)
+    }
+
+    fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
+        validate_region(region)?;
+        if region.is_empty() {
+            return Ok(Vec::new());
+        }
+        Ok((0..self.prims.len())
+            .filter(|&i| self.prims.overlaps_box(i, region))
+            .map(|i| i as u32)
+            .collect())
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}

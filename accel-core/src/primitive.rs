@@ -1,0 +1,98 @@
+//! What an accelerator needs from the things it indexes.
+//!
+//! Accelerators never copy geometry: they store `u32` indices into a
+//! [`PrimitiveSet`] and call back into it. Every accelerator calls the same
+//! [`PrimitiveSet::intersect`], which is what makes their answers bit-for-bit
+//! identical to [`crate::BruteForce`].
+
+use crate::{Aabb, PreparedRay, PrimHit, Real};
+
+/// One primitive that knows its bounds and how a ray meets it.
+///
+/// Implement this for your own shape and pass a slice of them (`&[MyShape]`)
+/// wherever a [`PrimitiveSet`] is expected.
+///
+/// # Contract
+/// - [`Primitive::intersect`] is a pure function of the ray: its `t`, `u`, `v`
+///   do not depend on `t_max`, which only decides whether the hit is returned
+///   (`ray.t_min ≤ t ≤ t_max`). It never returns NaN.
+/// - Its hits are accurate to rounding: the reported point `o + t·d` lies within
+///   about `gamma(16)·(max |p − o|)` of the primitive (`p` over its bounds), which
+///   the accelerators' conservative traversal allows for.
+/// - [`Primitive::overlaps_box`] never answers `false` for a box the primitive
+///   truly meets; it may answer `true` for a box within rounding distance.
+pub trait Primitive<T: Real>: Sync {
+    /// A box that holds the primitive.
+    fn bounds(&self) -> Aabb<T>;
+
+    /// The hit of `ray` with `ray.t_min ≤ t ≤ t_max`, if any.
+    fn intersect(&self, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>>;
+
+    /// Whether the primitive meets the closed box `b`. The default tests the
+    /// bounds; shapes with an exact test override it, so that long thin shapes
+    /// are referenced only by the cells they really touch.
+    fn overlaps_box(&self, b: &Aabb<T>) -> bool {
+        self.bounds().overlaps(b)
+    }
+}
+
+/// An indexed collection of primitives: a triangle mesh, a slice of spheres,
+/// a user's own set. Indices run over `0..len()`.
+///
+/// The same contract as [`Primitive`] holds for each index.
+pub trait PrimitiveSet<T: Real>: Sync {
+    /// Number of primitives.
+    fn len(&self) -> usize;
+
+    /// True when there are no primitives.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bounds of primitive `i`.
+    fn bounds(&self, i: usize) -> Aabb<T>;
+
+    /// The hit of `ray` with primitive `i` in `[ray.t_min, t_max]`, if any.
+    fn intersect(&self, i: usize, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>>;
+
+    /// Whether primitive `i` meets the closed box `b` (conservatively).
+    fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool;
+}
+
+impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
+    #[inline]
+    fn len(&self) -> usize {
+        <[P]>::len(self)
+    }
+    #[inline]
+    fn bounds(&self, i: usize) -> Aabb<T> {
+        self[i].bounds()
+    }
+    #[inline]
+    fn intersect(&self, i: usize, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>> {
+        self[i].intersect(ray, t_max)
+    }
+    #[inline]
+    fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
+        self[i].overlaps_box(b)
+    }
+}
+
+impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
+    #[inline]
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    #[inline]
+    fn bounds(&self, i: usize) -> Aabb<T> {
+        self[i].bounds()
+    }
+    #[inline]
+    fn intersect(&self, i: usize, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>> {
+        self[i].intersect(ray, t_max)
+    }
+    #[inline]
+    fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
+        self[i].overlaps_box(b)
+    }
+}

@@ -1,0 +1,199 @@
+//! Rays, their validation, and the per-ray constants the queries share.
+
+use crate::{Real, Vec3};
+
+/// Why a query was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum QueryError {
+    /// The ray origin has a NaN or infinite component.
+    #[error("ray origin is not finite")]
+    NonFiniteOrigin,
+    /// The ray direction has a NaN or infinite component.
+    #[error("ray direction is not finite")]
+    NonFiniteDirection,
+    /// The ray direction is the zero vector (with either sign of zero).
+    #[error("ray direction is zero")]
+    ZeroDirection,
+    /// `t_min` or `t_max` is NaN.
+    #[error("ray interval bound is NaN")]
+    NanInterval,
+    /// A region query box has a NaN or infinite corner.
+    #[error("query region is not finite")]
+    NonFiniteRegion,
+}
+
+/// A ray `origin + t·direction` restricted to `t ∈ [t_min, t_max]`.
+///
+/// The direction may have any non-zero length (`t` is measured in units of it)
+/// and components of either sign of zero. `t_max` may be `+∞`. An interval
+/// with `t_min > t_max` is empty: every query answers "no hit" for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray<T> {
+    /// Where the ray starts (at `t = 0`).
+    pub origin: Vec3<T>,
+    /// Direction; not normalised.
+    pub direction: Vec3<T>,
+    /// Smallest accepted hit parameter (inclusive).
+    pub t_min: T,
+    /// Largest accepted hit parameter (inclusive).
+    pub t_max: T,
+}
+
+impl<T: Real> Ray<T> {
+    /// A ray over `[0, +∞]`, validated.
+    ///
+    /// # Errors
+    /// [`QueryError`] for a non-finite origin or direction, or a zero direction.
+    pub fn new(origin: Vec3<T>, direction: Vec3<T>) -> Result<Self, QueryError> {
+        Self::with_interval(origin, direction, T::ZERO, T::INFINITY)
+    }
+
+    /// A ray over `[t_min, t_max]`, validated.
+    ///
+    /// # Errors
+    /// [`QueryError`] as [`Ray::validate`] reports.
+    pub fn with_interval(
+        origin: Vec3<T>,
+        direction: Vec3<T>,
+        t_min: T,
+        t_max: T,
+    ) -> Result<Self, QueryError> {
+        let r = Self {
+            origin,
+            direction,
+            t_min,
+            t_max,
+        };
+        r.validate()?;
+        Ok(r)
+    }
+
+    /// Checks the ray: every accelerator calls this before answering.
+    ///
+    /// # Errors
+    /// [`QueryError::NonFiniteOrigin`], [`QueryError::NonFiniteDirection`],
+    /// [`QueryError::ZeroDirection`] or [`QueryError::NanInterval`].
+    #[inline]
+    pub fn validate(&self) -> Result<(), QueryError> {
+        if !self.origin.is_finite() {
+            return Err(QueryError::NonFiniteOrigin);
+        }
+        if !self.direction.is_finite() {
+            return Err(QueryError::NonFiniteDirection);
+        }
+        if self.direction == Vec3::ZERO {
+            return Err(QueryError::ZeroDirection);
+        }
+        if self.t_min.is_nan() || self.t_max.is_nan() {
+            return Err(QueryError::NanInterval);
+        }
+        Ok(())
+    }
+
+    /// True when `[t_min, t_max]` holds no value.
+    #[inline]
+    #[must_use]
+    pub fn is_empty_interval(&self) -> bool {
+        !(self.t_min <= self.t_max)
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    #[must_use]
+    pub fn at(&self, t: T) -> Vec3<T> {
+        self.origin + self.direction * t
+    }
+
+    /// Converts to another precision through `f64`.
+    #[must_use]
+    pub fn cast<U: Real>(&self) -> Ray<U> {
+        Ray {
+            origin: self.origin.cast(),
+            direction: self.direction.cast(),
+            t_min: U::from_f64(self.t_min.to_f64()),
+            t_max: U::from_f64(self.t_max.to_f64()),
+        }
+    }
+}
+
+/// A validated ray with the constants that every primitive test reuses:
+/// the reciprocal direction and the shear of the watertight triangle test
+/// (Woop, Benthin & Wald 2013: the axis `kz` of the largest direction
+/// component, the two others `kx`, `ky`, and `S = (dx/dz, dy/dz, 1/dz)`).
+#[derive(Clone, Copy, Debug)]
+pub struct PreparedRay<T> {
+    /// The ray.
+    pub ray: Ray<T>,
+    /// `1 / direction`, `±∞` for `±0` components.
+    pub inv_dir: Vec3<T>,
+    /// Permuted axes `[kx, ky, kz]`, `kz` the dominant direction axis.
+    pub axes: [usize; 3],
+    /// Shear constants `(Sx, Sy, Sz)`.
+    pub shear: Vec3<T>,
+}
+
+impl<T: Real> PreparedRay<T> {
+    /// Prepares a ray that has passed [`Ray::validate`].
+    #[inline]
+    #[must_use]
+    pub fn new(ray: Ray<T>) -> Self {
+        debug_assert!(ray.validate().is_ok());
+        let d = ray.direction;
+        let kz = d.abs().max_dimension();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Swapping keeps the winding (and so the sign convention) of the edge functions.
+        if d[kz] < T::ZERO {
+            core::mem::swap(&mut kx, &mut ky);
+        }
+        let shear = Vec3::new(d[kx] / d[kz], d[ky] / d[kz], T::ONE / d[kz]);
+        Self {
+            ray,
+            inv_dir: Vec3::new(T::ONE / d.x, T::ONE / d.y, T::ONE / d.z),
+            axes: [kx, ky, kz],
+            shear,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_rays_get_typed_errors() {
+        let o = Vec3::new(0.0f32, 0.0, 0.0);
+        let d = Vec3::new(0.0f32, 0.0, 1.0);
+        assert_eq!(
+            Ray::new(Vec3::new(f32::NAN, 0.0, 0.0), d),
+            Err(QueryError::NonFiniteOrigin)
+        );
+        assert_eq!(
+            Ray::new(o, Vec3::new(0.0, f32::INFINITY, 0.0)),
+            Err(QueryError::NonFiniteDirection)
+        );
+        assert_eq!(
+            Ray::new(o, Vec3::new(-0.0, 0.0, -0.0)),
+            Err(QueryError::ZeroDirection)
+        );
+        assert_eq!(
+            Ray::with_interval(o, d, f32::NAN, 1.0),
+            Err(QueryError::NanInterval)
+        );
+        // An empty interval is valid and simply holds nothing.
+        let r = Ray::with_interval(o, d, 2.0, 1.0).unwrap();
+        assert!(r.is_empty_interval());
+        assert!(!Ray::new(o, d).unwrap().is_empty_interval());
+    }
+
+    #[test]
+    fn shear_axes_follow_the_dominant_component() {
+        let r = Ray::new(Vec3::ZERO, Vec3::new(0.5f64, -3.0, 1.0)).unwrap();
+        let p = PreparedRay::new(r);
+        assert_eq!(p.axes[2], 1);
+        // Negative dominant component swaps kx and ky.
+        assert_eq!(p.axes, [0, 2, 1]);
+        assert_eq!(p.shear, Vec3::new(0.5 / -3.0, 1.0 / -3.0, 1.0 / -3.0));
+    }
+}

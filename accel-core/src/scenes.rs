@@ -1,0 +1,508 @@
+//! The workspace's generated scenes and rays, in one place.
+//!
+//! Benchmarks, tests and `render` share these generators so that a figure
+//! quoted for "the 100k soup" means the same triangles everywhere. Everything
+//! is deterministic: a seed fixes the output, on every machine and version (the
+//! generator is [`SplitMix64`], whose sequence is specified, rather than a
+//! crate whose value streams may change between releases).
+
+use crate::{Aabb, Ray, Real, TriangleMesh, Vec3};
+use core::f64::consts::{PI, TAU};
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fully specified generator.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    /// A generator from a seed.
+    #[must_use]
+    pub const fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[0, 1)` with 53 random bits.
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next_f64()
+    }
+
+    /// A point uniform in the box.
+    pub fn point_in(&mut self, b: &Aabb<f64>) -> Vec3<f64> {
+        Vec3::new(
+            self.range(b.min.x, b.max.x),
+            self.range(b.min.y, b.max.y),
+            self.range(b.min.z, b.max.z),
+        )
+    }
+
+    /// A direction uniform on the unit sphere.
+    pub fn unit_vector(&mut self) -> Vec3<f64> {
+        let z = self.range(-1.0, 1.0);
+        let phi = self.range(0.0, TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// Builds a mesh from generator output, which is finite by construction.
+fn mesh(positions: Vec<Vec3<f64>>, indices: Vec<[u32; 3]>) -> TriangleMesh<f64> {
+    TriangleMesh::new(positions, indices).expect("generated meshes are valid")
+}
+
+/// A latitude–longitude sphere with shared vertices and about `triangles`
+/// triangles (closed: the poles are single vertices).
+#[must_use]
+pub fn uv_sphere(center: Vec3<f64>, radius: f64, triangles: usize) -> TriangleMesh<f64> {
+    // 2·slices·(stacks − 1) triangles with slices = 2·stacks.
+    let stacks = ((triangles as f64 / 4.0).sqrt().round() as u32).max(2);
+    let slices = 2 * stacks;
+    let mut p = vec![center + Vec3::new(0.0, 0.0, radius)];
+    for i in 1..stacks {
+        let theta = PI * f64::from(i) / f64::from(stacks);
+        for j in 0..slices {
+            let phi = TAU * f64::from(j) / f64::from(slices);
+            p.push(
+                center
+                    + Vec3::new(
+                        theta.sin() * phi.cos(),
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                    ) * radius,
+            );
+        }
+    }
+    let south = p.len() as u32;
+    p.push(center - Vec3::new(0.0, 0.0, radius));
+    let ring = |i: u32, j: u32| 1 + (i - 1) * slices + j % slices;
+    let mut t = Vec::new();
+    for j in 0..slices {
+        t.push([0, ring(1, j), ring(1, j + 1)]);
+        t.push([south, ring(stacks - 1, j + 1), ring(stacks - 1, j)]);
+    }
+    for i in 1..stacks - 1 {
+        for j in 0..slices {
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i, j + 1),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+            );
+            t.push([a, c, b]);
+            t.push([b, c, d]);
+        }
+    }
+    mesh(p, t)
+}
+
+/// A torus around the z axis with shared vertices, `rings × sides × 2` triangles.
+#[must_use]
+pub fn torus(
+    center: Vec3<f64>,
+    major: f64,
+    minor: f64,
+    rings: u32,
+    sides: u32,
+) -> TriangleMesh<f64> {
+    let (rings, sides) = (rings.max(3), sides.max(3));
+    let mut p = Vec::new();
+    for i in 0..rings {
+        let u = TAU * f64::from(i) / f64::from(rings);
+        for j in 0..sides {
+            let v = TAU * f64::from(j) / f64::from(sides);
+            let r = major + minor * v.cos();
+            p.push(center + Vec3::new(r * u.cos(), r * u.sin(), minor * v.sin()));
+        }
+    }
+    let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
+    let mut t = Vec::new();
+    for i in 0..rings {
+        for j in 0..sides {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+            t.push([a, b, c]);
+            t.push([c, b, d]);
+        }
+    }
+    mesh(p, t)
+}
+
+/// An axis-aligned box surface with shared vertices, each face split into
+/// `k × k` quads (`12·k²` triangles).
+#[must_use]
+pub fn box_mesh(b: &Aabb<f64>, k: u32) -> TriangleMesh<f64> {
+    let k = k.max(1);
+    let mut p: Vec<Vec3<f64>> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut vertex = |g: [u32; 3]| -> u32 {
+        *index.entry(g).or_insert_with(|| {
+            let f = |a: usize| b.min[a] + (b.max[a] - b.min[a]) * f64::from(g[a]) / f64::from(k);
+            p.push(Vec3::new(f(0), f(1), f(2)));
+            (p.len() - 1) as u32
+        })
+    };
+    let mut t = Vec::new();
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0, k] {
+            for i in 0..k {
+                for j in 0..k {
+                    let g = |di: u32, dj: u32| {
+                        let mut c = [0u32; 3];
+                        c[axis] = side;
+                        c[u] = i + di;
+                        c[v] = j + dj;
+                        c
+                    };
+                    let (a, b2, c, d) = (
+                        vertex(g(0, 0)),
+                        vertex(g(1, 0)),
+                        vertex(g(0, 1)),
+                        vertex(g(1, 1)),
+                    );
+                    // Outward winding on both sides.
+                    if side == 0 {
+                        t.push([a, c, b2]);
+                        t.push([b2, c, d]);
+                    } else {
+                        t.push([a, b2, c]);
+                        t.push([b2, d, c]);
+                    }
+                }
+            }
+        }
+    }
+    mesh(p, t)
+}
+
+/// Height of the generated terrain at `(x, y)` in `[0, 1]²`: a sum of
+/// octaves of smooth waves, range about `[−0.15, 0.15]`.
+fn terrain_height(x: f64, y: f64, phases: &[(f64, f64, f64)]) -> f64 {
+    let mut h = 0.0;
+    let mut amplitude = 0.08;
+    let mut frequency = 3.0;
+    for &(a, b, c) in phases {
+        h += amplitude * ((frequency * x + a) * TAU).sin() * ((frequency * y + b) * TAU).cos();
+        h += 0.5 * amplitude * ((frequency * (x + y) + c) * TAU).sin();
+        amplitude *= 0.5;
+        frequency *= 2.1;
+    }
+    h
+}
+
+/// A heightfield over `[0, 1]²` (z up) with shared vertices and about
+/// `triangles` triangles (`2·k²` for a `k × k` grid of quads).
+#[must_use]
+pub fn terrain(triangles: usize, seed: u64) -> TriangleMesh<f64> {
+    let k = ((triangles as f64 / 2.0).sqrt().round() as u32).max(1);
+    let mut rng = SplitMix64::new(seed);
+    let phases: Vec<(f64, f64, f64)> = (0..6)
+        .map(|_| (rng.next_f64(), rng.next_f64(), rng.next_f64()))
+        .collect();
+    let mut p = Vec::with_capacity(((k + 1) * (k + 1)) as usize);
+    for j in 0..=k {
+        for i in 0..=k {
+            let (x, y) = (f64::from(i) / f64::from(k), f64::from(j) / f64::from(k));
+            p.push(Vec3::new(x, y, terrain_height(x, y, &phases)));
+        }
+    }
+    let at = |i: u32, j: u32| j * (k + 1) + i;
+    let mut t = Vec::with_capacity(2 * (k * k) as usize);
+    for j in 0..k {
+        for i in 0..k {
+            t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    mesh(p, t)
+}
+
+/// `n` small random triangles in the unit cube, each of size about the mean
+/// spacing `n^(−1/3)`.
+#[must_use]
+pub fn random_soup(n: usize, seed: u64) -> TriangleMesh<f64> {
+    let mut rng = SplitMix64::new(seed);
+    let size = 0.5 * (n.max(1) as f64).cbrt().recip();
+    let unit = Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0));
+    let mut tris = Vec::with_capacity(n);
+    for _ in 0..n {
+        let c = rng.point_in(&unit);
+        tris.push([0, 1, 2].map(|_| c + rng.unit_vector() * size));
+    }
+    TriangleMesh::from_triangles(&tris).expect("generated meshes are valid")
+}
+
+/// "Teapot in a stadium": a dense sphere of about `dense` triangles of radius
+/// 1 at the origin, inside a huge box (side `stadium`) of 12 triangles and a
+/// flat floor of 2 triangles just below the sphere.
+#[must_use]
+pub fn teapot_in_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
+    let mut m = uv_sphere(Vec3::ZERO, 1.0, dense);
+    let h = stadium / 2.0;
+    m.append(&box_mesh(&Aabb::new(Vec3::splat(-h), Vec3::splat(h)), 1))
+        .expect("small mesh");
+    let floor = [
+        [
+            Vec3::new(-h, -h, -1.5),
+            Vec3::new(h, -h, -1.5),
+            Vec3::new(h, h, -1.5),
+        ],
+        [
+            Vec3::new(-h, -h, -1.5),
+            Vec3::new(h, h, -1.5),
+            Vec3::new(-h, h, -1.5),
+        ],
+    ];
+    m.append(&TriangleMesh::from_triangles(&floor).expect("valid"))
+        .expect("small mesh");
+    m
+}
+
+/// The generated benchmark scenes, by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum GeneratedScene {
+    /// A tessellated sphere of about 100k triangles.
+    Sphere100k,
+    /// 100k random small triangles in a cube.
+    Soup100k,
+    /// A heightfield of about 1M triangles.
+    Terrain1M,
+    /// A 100k-triangle sphere in a box of side 10⁴ with a floor.
+    TeapotInStadium,
+}
+
+impl GeneratedScene {
+    /// Every generated scene.
+    pub const ALL: [Self; 4] = [
+        Self::Sphere100k,
+        Self::Soup100k,
+        Self::Terrain1M,
+        Self::TeapotInStadium,
+    ];
+
+    /// A short name for reports.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Sphere100k => "sphere_100k",
+            Self::Soup100k => "soup_100k",
+            Self::Terrain1M => "terrain_1m",
+            Self::TeapotInStadium => "teapot_in_stadium",
+        }
+    }
+
+    /// The scene's mesh.
+    #[must_use]
+    pub fn mesh(self) -> TriangleMesh<f64> {
+        match self {
+            Self::Sphere100k => uv_sphere(Vec3::ZERO, 1.0, 100_000),
+            Self::Soup100k => random_soup(100_000, 0x50_u64),
+            Self::Terrain1M => terrain(1_000_000, 0x7E_u64),
+            Self::TeapotInStadium => teapot_in_stadium(100_000, 1.0e4),
+        }
+    }
+
+    /// A camera that frames the part of the scene worth looking at.
+    #[must_use]
+    pub fn camera(self) -> Camera {
+        match self {
+            Self::TeapotInStadium => Camera::look_at(
+                Vec3::new(3.0, -4.0, 2.0),
+                Vec3::ZERO,
+                Vec3::new(0.0, 0.0, 1.0),
+                45.0,
+            ),
+            Self::Terrain1M => Camera::look_at(
+                Vec3::new(-0.3, -0.3, 0.6),
+                Vec3::new(0.5, 0.5, 0.0),
+                Vec3::new(0.0, 0.0, 1.0),
+                60.0,
+            ),
+            _ => Camera::frame(&self.mesh_bounds(), Vec3::new(1.0, -1.6, 0.9)),
+        }
+    }
+
+    fn mesh_bounds(self) -> Aabb<f64> {
+        match self {
+            Self::Sphere100k => Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)),
+            Self::Soup100k => Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)),
+            _ => self.mesh().bounds(),
+        }
+    }
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3<f64>,
+    /// Unit view direction.
+    pub forward: Vec3<f64>,
+    /// Unit right vector.
+    pub right: Vec3<f64>,
+    /// Unit up vector (orthogonal to `forward` and `right`).
+    pub up: Vec3<f64>,
+    /// Vertical field of view, radians.
+    pub vfov: f64,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`; `up` need not be orthogonal.
+    #[must_use]
+    pub fn look_at(eye: Vec3<f64>, target: Vec3<f64>, up: Vec3<f64>, vfov_degrees: f64) -> Self {
+        let forward = (target - eye).normalized();
+        let mut right = forward.cross(up);
+        if right.length_squared() < 1e-24 {
+            // Looking along `up`: any perpendicular will do.
+            right = forward.cross(Vec3::new(up.y, up.z, up.x));
+        }
+        let right = right.normalized();
+        let up = right.cross(forward);
+        Self {
+            eye,
+            forward,
+            right,
+            up,
+            vfov: vfov_degrees.to_radians(),
+        }
+    }
+
+    /// A camera looking at the center of `b` from direction `from` (z up),
+    /// far enough that the whole box fits a 45° view.
+    #[must_use]
+    pub fn frame(b: &Aabb<f64>, from: Vec3<f64>) -> Self {
+        let center = b.center();
+        let radius = (b.diagonal().length() * 0.5).max(1e-300);
+        let vfov: f64 = 45.0;
+        let distance = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
+        Self::look_at(
+            center + from.normalized() * distance,
+            center,
+            Vec3::new(0.0, 0.0, 1.0),
+            vfov,
+        )
+    }
+
+    /// The ray through image position `(x, y)` in pixels of a `width × height`
+    /// image (`(0, 0)` top left; pixel centers at `+0.5`).
+    #[must_use]
+    pub fn ray_through<T: Real>(&self, x: f64, y: f64, width: u32, height: u32) -> Ray<T> {
+        let aspect = f64::from(width) / f64::from(height);
+        let h = (self.vfov * 0.5).tan();
+        let sx = (2.0 * x / f64::from(width) - 1.0) * h * aspect;
+        let sy = (1.0 - 2.0 * y / f64::from(height)) * h;
+        let d = self.forward + self.right * sx + self.up * sy;
+        Ray {
+            origin: self.eye.cast(),
+            direction: d.cast(),
+            t_min: T::ZERO,
+            t_max: T::INFINITY,
+        }
+    }
+
+    /// One ray through the center of every pixel, row by row.
+    #[must_use]
+    pub fn rays<T: Real>(&self, width: u32, height: u32) -> Vec<Ray<T>> {
+        (0..height)
+            .flat_map(|y| {
+                (0..width).map(move |x| {
+                    self.ray_through(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height)
+                })
+            })
+            .collect()
+    }
+}
+
+/// `n` rays with origins uniform in `b` grown by a quarter of its diagonal and
+/// directions uniform on the sphere: incoherent, many start inside the scene.
+#[must_use]
+pub fn random_rays<T: Real>(b: &Aabb<f64>, n: usize, seed: u64) -> Vec<Ray<T>> {
+    let mut rng = SplitMix64::new(seed);
+    let grown = b.expanded(b.diagonal().length() * 0.25);
+    (0..n)
+        .map(|_| Ray {
+            origin: rng.point_in(&grown).cast(),
+            direction: rng.unit_vector().cast(),
+            t_min: T::ZERO,
+            t_max: T::INFINITY,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Accelerator, BruteForce, PrimitiveSet};
+
+    /// Each edge of a closed mesh is used by exactly two triangles, once in each direction.
+    fn assert_closed(m: &TriangleMesh<f64>) {
+        let mut edges = std::collections::HashMap::new();
+        for t in m.indices() {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        for (&(a, b), &n) in &edges {
+            assert_eq!(n, 1, "edge {a}-{b} used {n} times in one direction");
+            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} has no twin");
+        }
+    }
+
+    #[test]
+    fn generated_meshes_are_closed_and_sized() {
+        let s = uv_sphere(Vec3::ZERO, 1.0, 100_000);
+        assert!((95_000..=105_000).contains(&s.triangle_count()));
+        assert_closed(&s);
+        assert_closed(&torus(Vec3::ZERO, 2.0, 0.5, 24, 12));
+        let b = box_mesh(
+            &Aabb::new(Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 3.0, 6.0)),
+            3,
+        );
+        assert_eq!(b.triangle_count(), 12 * 9);
+        assert_closed(&b);
+        let t = terrain(1000, 1);
+        assert_eq!(t.triangle_count(), 2 * 22 * 22);
+    }
+
+    #[test]
+    fn generators_are_deterministic() {
+        assert_eq!(random_soup(100, 7), random_soup(100, 7));
+        assert_ne!(random_soup(100, 7), random_soup(100, 8));
+        // SplitMix64's published first output for seed 0.
+        assert_eq!(SplitMix64::new(0).next_u64(), 0xE220_A839_7B1D_CDAF);
+    }
+
+    #[test]
+    fn box_mesh_faces_point_outward() {
+        let b = Aabb::new(Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 3.0, 6.0));
+        let m = box_mesh(&b, 2);
+        let c = b.center();
+        for i in 0..m.len() {
+            let [p0, p1, p2] = m.triangle(i);
+            let n = (p1 - p0).cross(p2 - p0);
+            assert!(n.dot(p0 - c) > 0.0, "triangle {i} faces inward");
+        }
+    }
+
+    #[test]
+    fn camera_center_ray_hits_the_framed_sphere() {
+        let m = uv_sphere(Vec3::new(5.0, 0.0, 0.0), 2.0, 500);
+        let cam = Camera::frame(&m.bounds(), Vec3::new(0.0, -1.0, 0.0));
+        let brute = BruteForce::new(&m).unwrap();
+        let r: Ray<f64> = cam.ray_through(50.0, 50.0, 100, 100);
+        assert!(brute.intersect(&r).unwrap().is_some());
+        let corner: Ray<f64> = cam.ray_through(0.0, 0.0, 100, 100);
+        assert!(brute.intersect(&corner).unwrap().is_none());
+    }
+}

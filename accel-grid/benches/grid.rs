@@ -1,0 +1,89 @@
+//! Uniform grid: build throughput (triangles/s) and nearest-hit and any-hit
+//! throughput (rays/s, one thread and all threads) on the generated scenes and
+//! on `../shared/scenes/*.glb` when present, with camera and random rays.
+//!
+//! `cargo bench -p accel-grid` runs everything; criterion's filter narrows it,
+//! e.g. `cargo bench -p accel-grid -- terrain_1m/build`.
+
+use accel_core::gltf_scene::{load, shared_scene_files};
+use accel_core::scenes::{Camera, GeneratedScene, random_rays};
+use accel_core::{Accelerator, Ray, TriangleMesh, Vec3};
+use accel_grid::Grid;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use rayon::prelude::*;
+use std::time::Duration;
+
+/// Camera image size for the coherent ray set (65,536 rays).
+const CAMERA_SIDE: u32 = 256;
+/// Number of random (incoherent) rays.
+const RANDOM_RAYS: usize = 65_536;
+
+struct BenchScene {
+    name: String,
+    mesh: TriangleMesh<f32>,
+    camera: Camera,
+}
+
+fn scenes() -> Vec<BenchScene> {
+    let mut out: Vec<BenchScene> = GeneratedScene::ALL
+        .iter()
+        .map(|&s| BenchScene {
+            name: s.name().to_owned(),
+            mesh: s.mesh().cast().expect("generated scenes fit f32"),
+            camera: s.camera(),
+        })
+        .collect();
+    for path in shared_scene_files() {
+        let Ok(scene) = load(&path) else { continue };
+        let Ok(mesh) = scene.mesh.cast() else { continue };
+        let camera = Camera::frame(&scene.mesh.bounds(), Vec3::new(0.3, -1.0, 0.4));
+        let name = path.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        out.push(BenchScene { name, mesh, camera });
+    }
+    out
+}
+
+fn rays_per_second<A: Accelerator<f32>>(c: &mut Criterion, group: &str, accel: &A, rays: &[Ray<f32>]) {
+    let mut g = c.benchmark_group(group);
+    g.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3));
+    g.throughput(Throughput::Elements(rays.len() as u64));
+    g.bench_function("nearest/1-thread", |b| {
+        b.iter(|| rays.iter().filter(|r| accel.intersect(r).unwrap().is_some()).count());
+    });
+    g.bench_function("nearest/all-threads", |b| {
+        b.iter(|| rays.par_iter().filter(|r| accel.intersect(r).unwrap().is_some()).count());
+    });
+    g.bench_function("any-hit/1-thread", |b| {
+        b.iter(|| rays.iter().filter(|r| accel.occluded(r).unwrap()).count());
+    });
+    g.bench_function("any-hit/all-threads", |b| {
+        b.iter(|| rays.par_iter().filter(|r| accel.occluded(r).unwrap()).count());
+    });
+    g.finish();
+}
+
+fn bench(c: &mut Criterion) {
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
+    for scene in scenes() {
+        let tris = scene.mesh.triangle_count() as u64;
+        let mut g = c.benchmark_group(format!("{}/build", scene.name));
+        g.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3));
+        g.throughput(Throughput::Elements(tris));
+        g.bench_function(BenchmarkId::from_parameter("1-thread"), |b| {
+            b.iter(|| one.install(|| Grid::new(&scene.mesh).unwrap().stats().references));
+        });
+        g.bench_function(BenchmarkId::from_parameter("all-threads"), |b| {
+            b.iter(|| Grid::new(&scene.mesh).unwrap().stats().references);
+        });
+        g.finish();
+
+        let grid = Grid::new(&scene.mesh).expect("grid builds");
+        let camera_rays = scene.camera.rays::<f32>(CAMERA_SIDE, CAMERA_SIDE);
+        rays_per_second(c, &format!("{}/camera", scene.name), &grid, &camera_rays);
+        let random = random_rays::<f32>(&scene.mesh.bounds().cast(), RANDOM_RAYS, 7);
+        rays_per_second(c, &format!("{}/random", scene.name), &grid, &random);
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

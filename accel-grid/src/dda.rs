@@ -1,0 +1,331 @@
+//! The 3D-DDA of Amanatides & Woo (1987), walked by a thin beam.
+//!
+//! The classic DDA keeps, per axis, the parameter `t_next` at which the ray
+//! crosses the next cell boundary, and always steps along the smallest. Here the
+//! ray is the beam of [`TraversalRay`]: the box of half-width `delta` swept along
+//! it. Per axis the beam's cross-section spans the cells from a *trail* index
+//! (where `x − delta` is, for a positive direction) to a *lead* index (where
+//! `x + delta` is). A lead crossing opens a new slab of cells (the new lead index
+//! times the current ranges of the other axes, almost always one cell); a trail
+//! crossing only narrows a range, so trails are caught up lazily at each lead
+//! event. The walk thus visits every cell within `delta` of the ray, in the
+//! order the beam first touches them: the classic DDA when the ray is far from
+//! cell edges, and both neighbours when it runs along a face, an edge or through
+//! a corner, where rounding could otherwise skip a cell.
+//!
+//! Crossing parameters are computed from the stored boundaries as
+//! `((boundary − origin) ∓ delta) / d`, never accumulated, so their error is a
+//! few roundings relative to `|t|`, which `delta` covers.
+
+use crate::cells::{CellBox, GridGeometry};
+use accel_core::{Real, TraversalRay, Vec3};
+
+/// A beam walking the cells of one grid front to back.
+#[derive(Clone, Debug)]
+pub struct BeamWalk<'g, T> {
+    geom: &'g GridGeometry<T>,
+    origin: Vec3<T>,
+    dir: Vec3<T>,
+    inv_dir: Vec3<T>,
+    delta: T,
+    step: [i8; 3],
+    lead: [u32; 3],
+    trail: [u32; 3],
+    t_lead: [T; 3],
+    t_trail: [T; 3],
+}
+
+impl<'g, T: Real> BeamWalk<'g, T> {
+    /// Starts the walk at parameter `t_start` (inside or at the entry of the
+    /// grid; the caller clips it with [`TraversalRay`] or a slab test).
+    /// Returns the walk and the cells the beam touches at `t_start`.
+    #[inline]
+    pub fn start(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>, t_start: T) -> (Self, CellBox) {
+        let r = ray.ray();
+        let (origin, dir, delta) = (r.origin, r.direction, ray.delta);
+        let mut walk = Self {
+            geom,
+            origin,
+            dir,
+            inv_dir: ray.prepared.inv_dir,
+            delta,
+            step: [0; 3],
+            lead: [0; 3],
+            trail: [0; 3],
+            t_lead: [T::INFINITY; 3],
+            t_trail: [T::INFINITY; 3],
+        };
+        let mut cells = CellBox::single([0; 3]);
+        for a in 0..3 {
+            let rel = dir[a] * t_start;
+            let low = geom.axis_cell_relative(a, origin[a], rel - delta);
+            let high = geom.axis_cell_relative(a, origin[a], rel + delta);
+            cells.lo[a] = low;
+            cells.hi[a] = high;
+            let d = dir[a];
+            if d > T::ZERO {
+                walk.step[a] = 1;
+                walk.trail[a] = low;
+                walk.lead[a] = high;
+            } else if d < T::ZERO {
+                walk.step[a] = -1;
+                walk.trail[a] = high;
+                walk.lead[a] = low;
+            } else {
+                // Parallel to the axis: the range never changes.
+                walk.trail[a] = low;
+                walk.lead[a] = high;
+                continue;
+            }
+            walk.t_lead[a] = walk.lead_time(a);
+            walk.t_trail[a] = walk.trail_time(a);
+        }
+        (walk, cells)
+    }
+
+    /// The parameter of the next lead crossing (`+∞` when the beam's front has
+    /// reached the last cell on every axis).
+    #[inline]
+    #[must_use]
+    pub fn next_event(&self) -> T {
+        self.t_lead[0].min(self.t_lead[1]).min(self.t_lead[2])
+    }
+
+    /// Moves the front to its next crossing if that happens at or before
+    /// `limit`, and returns the cells it opens; `None` ends the walk.
+    #[inline]
+    pub fn advance(&mut self, limit: T) -> Option<CellBox> {
+        let [t0, t1, t2] = self.t_lead;
+        let a = if t0 <= t1 {
+            if t0 <= t2 { 0 } else { 2 }
+        } else if t1 <= t2 {
+            1
+        } else {
+            2
+        };
+        let t = self.t_lead[a];
+        if !(t <= limit) {
+            return None;
+        }
+        let old_lead = self.lead[a];
+        self.lead[a] = old_lead.wrapping_add_signed(i32::from(self.step[a]));
+        self.t_lead[a] = self.lead_time(a);
+        if self.trail[a] == old_lead {
+            // The trail had caught up with the lead; it now has a crossing ahead.
+            self.t_trail[a] = self.trail_time(a);
+        }
+        let mut cells = CellBox::single(self.lead);
+        for b in 0..3 {
+            while self.t_trail[b] <= t {
+                self.trail[b] = self.trail[b].wrapping_add_signed(i32::from(self.step[b]));
+                self.t_trail[b] = self.trail_time(b);
+            }
+            if b != a {
+                cells.lo[b] = self.trail[b].min(self.lead[b]);
+                cells.hi[b] = self.trail[b].max(self.lead[b]);
+            }
+        }
+        Some(cells)
+    }
+
+    /// `rel / d` along `axis`, by the reciprocal when it is finite (a
+    /// component so small that `1/d` overflows takes the division).
+    #[inline]
+    fn time(&self, axis: usize, rel: T) -> T {
+        let inv = self.inv_dir[axis];
+        if inv.is_finite() {
+            rel * inv
+        } else {
+            rel / self.dir[axis]
+        }
+    }
+
+    /// When the beam's front crosses into the cell after `lead`.
+    #[inline]
+    fn lead_time(&self, axis: usize) -> T {
+        let b = self.geom.boundaries(axis);
+        let lead = self.lead[axis] as usize;
+        let o = self.origin[axis];
+        if self.step[axis] > 0 {
+            if lead + 1 < b.len() - 1 {
+                self.time(axis, (b[lead + 1] - o) - self.delta)
+            } else {
+                T::INFINITY
+            }
+        } else if lead > 0 {
+            self.time(axis, (b[lead] - o) + self.delta)
+        } else {
+            T::INFINITY
+        }
+    }
+
+    /// When the beam's back leaves the cell `trail` (never past the lead).
+    #[inline]
+    fn trail_time(&self, axis: usize) -> T {
+        let b = self.geom.boundaries(axis);
+        let trail = self.trail[axis] as usize;
+        let o = self.origin[axis];
+        if self.step[axis] > 0 {
+            if self.trail[axis] < self.lead[axis] {
+                self.time(axis, (b[trail + 1] - o) + self.delta)
+            } else {
+                T::INFINITY
+            }
+        } else if self.trail[axis] > self.lead[axis] {
+            self.time(axis, (b[trail] - o) - self.delta)
+        } else {
+            T::INFINITY
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use accel_core::{Aabb, Ray};
+    use std::collections::BTreeSet;
+
+    fn grid() -> GridGeometry<f64> {
+        GridGeometry::new(
+            Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(4.0, 4.0, 4.0)),
+            [4, 4, 4],
+        )
+    }
+
+    /// Every cell the walk visits, in order of first visit.
+    fn walk(g: &GridGeometry<f64>, o: [f64; 3], d: [f64; 3]) -> Vec<[u32; 3]> {
+        let ray = Ray::new(o.into(), d.into()).unwrap();
+        let tr = TraversalRay::new(&ray, g.bounds()).expect("ray meets the grid");
+        let (mut w, first) = BeamWalk::start(g, &tr, tr.t_start);
+        let mut seen = Vec::new();
+        let mut push = |cb: CellBox| {
+            for c in cb.iter() {
+                if !seen.contains(&c) {
+                    seen.push(c);
+                }
+            }
+        };
+        push(first);
+        while let Some(cb) = w.advance(tr.t_end) {
+            push(cb);
+        }
+        seen
+    }
+
+    /// The cells whose closed box the exact segment passes through, sampled finely.
+    fn sampled(o: [f64; 3], d: [f64; 3], t0: f64, t1: f64) -> BTreeSet<[u32; 3]> {
+        let mut s = BTreeSet::new();
+        for i in 0..=20_000 {
+            let t = t0 + (t1 - t0) * i as f64 / 20_000.0;
+            let p: Vec<f64> = (0..3).map(|a| o[a] + t * d[a]).collect();
+            if p.iter().all(|&x| (0.0..=4.0).contains(&x)) {
+                s.insert([0, 1, 2].map(|a| (p[a].floor() as u32).min(3)));
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn oblique_ray_visits_its_cells_in_order() {
+        let g = grid();
+        let (o, d) = ([-1.0, 0.3, 0.7], [1.0, 0.41, 0.23]);
+        let cells = walk(&g, o, d);
+        let want = sampled(o, d, 0.0, 20.0);
+        let got: BTreeSet<_> = cells.iter().copied().collect();
+        assert_eq!(got, want);
+        // Front to back: the parameter of each cell's entry never decreases.
+        let entry = |c: &[u32; 3]| {
+            let b = g.cell_bounds(*c);
+            b.line_interval(o.into(), d.into()).unwrap().0
+        };
+        for w in cells.windows(2) {
+            assert!(entry(&w[0]) <= entry(&w[1]) + 1e-12, "{w:?}");
+        }
+    }
+
+    #[test]
+    fn axis_parallel_rays_with_signed_zeros() {
+        let g = grid();
+        for z in [0.0, -0.0] {
+            let cells = walk(&g, [-1.0, 1.5, 2.5], [1.0, z, z]);
+            assert_eq!(cells, vec![[0, 1, 2], [1, 1, 2], [2, 1, 2], [3, 1, 2]]);
+            let back = walk(&g, [9.0, 1.5, 2.5], [-2.0, z, -z]);
+            assert_eq!(back, vec![[3, 1, 2], [2, 1, 2], [1, 1, 2], [0, 1, 2]]);
+        }
+    }
+
+    #[test]
+    fn ray_along_a_face_walks_both_rows() {
+        let g = grid();
+        // On the plane y = 2 between rows 1 and 2, parallel to it.
+        let cells: BTreeSet<_> = walk(&g, [-1.0, 2.0, 0.5], [1.0, 0.0, 0.0])
+            .into_iter()
+            .collect();
+        let want: BTreeSet<_> = (0..4).flat_map(|x| [[x, 1, 0], [x, 2, 0]]).collect();
+        assert_eq!(cells, want);
+    }
+
+    #[test]
+    fn ray_along_an_edge_walks_all_four_neighbours() {
+        let g = grid();
+        let cells: BTreeSet<_> = walk(&g, [1.0, 3.0, -5.0], [0.0, 0.0, -1.0].map(|x: f64| -x))
+            .into_iter()
+            .collect();
+        let want: BTreeSet<_> = (0..4)
+            .flat_map(|z| [[0, 2, z], [1, 2, z], [0, 3, z], [1, 3, z]])
+            .collect();
+        assert_eq!(cells, want);
+    }
+
+    #[test]
+    fn ray_through_a_corner_visits_the_cells_around_it() {
+        let g = grid();
+        // Through the grid corner (2,2,2) along the diagonal: the exact ray
+        // meets the cells (i,i,i) only at shared corners, and rounding could
+        // send a plain DDA through any neighbour, so the beam visits all cells
+        // around each crossed corner.
+        let cells: BTreeSet<_> = walk(&g, [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0])
+            .into_iter()
+            .collect();
+        for i in 0..4 {
+            assert!(cells.contains(&[i, i, i]));
+        }
+        for c in [
+            [1, 1, 2],
+            [1, 2, 1],
+            [2, 1, 1],
+            [1, 2, 2],
+            [2, 1, 2],
+            [2, 2, 1],
+        ] {
+            assert!(
+                cells.contains(&c),
+                "missing neighbour {c:?} of corner (2,2,2)"
+            );
+        }
+        // Nothing far from the diagonal.
+        assert!(
+            cells
+                .iter()
+                .all(|c| c.iter().max().unwrap() - c.iter().min().unwrap() <= 1)
+        );
+    }
+
+    #[test]
+    fn rays_starting_inside_outside_and_on_a_face() {
+        let g = grid();
+        // Inside, in cell (2,1,3).
+        let inside = walk(&g, [2.5, 1.5, 3.5], [-1.0, 0.0, 0.0]);
+        assert_eq!(inside, vec![[2, 1, 3], [1, 1, 3], [0, 1, 3]]);
+        // On the face x = 2, going -x: the walk starts a hair behind the origin
+        // (the hit tolerance), so in cell 2, and crosses into cell 1 at once.
+        let on_face = walk(&g, [2.0, 1.5, 3.5], [-1.0, 0.0, 0.0]);
+        assert_eq!(on_face, vec![[2, 1, 3], [1, 1, 3], [0, 1, 3]]);
+        // On the grid's outer face, going in.
+        let entering = walk(&g, [0.0, 1.5, 3.5], [1.0, 0.0, 0.0]);
+        assert_eq!(entering, vec![[0, 1, 3], [1, 1, 3], [2, 1, 3], [3, 1, 3]]);
+        // Outside, going away: nothing.
+        let r = Ray::new(Vec3::new(5.0, 1.5, 3.5), Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        assert!(TraversalRay::new(&r, g.bounds()).is_none());
+    }
+}

@@ -1,0 +1,113 @@
+//! The uniform grid: its parts, and its invariant checker.
+
+use crate::build::{GridParams, build};
+use crate::cells::GridGeometry;
+use crate::csr::CellLists;
+use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
+
+/// A uniform grid over a primitive set (see the crate docs).
+///
+/// It borrows the primitives and stores only `u32` indices into them.
+#[derive(Debug)]
+pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
+    pub(crate) prims: &'a P,
+    pub(crate) geometry: GridGeometry<T>,
+    pub(crate) cells: CellLists,
+    pub(crate) stats: AccelStats,
+    /// True when the grid covers nothing (no primitive was placed).
+    pub(crate) empty: bool,
+}
+
+impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
+    /// Builds a grid with default parameters (density 2).
+    ///
+    /// # Errors
+    /// [`BuildError`] for non-finite primitives or an exceeded budget.
+    pub fn new(prims: &'a P) -> Result<Self, BuildError> {
+        Self::with_params(prims, &GridParams::default())
+    }
+
+    /// Builds a grid with the given parameters.
+    ///
+    /// # Errors
+    /// [`BuildError`] for non-finite primitives, an invalid density or region,
+    /// or an exceeded cell or reference budget.
+    pub fn with_params(prims: &'a P, params: &GridParams<T>) -> Result<Self, BuildError> {
+        let built = build(prims, params)?;
+        let grid = Self {
+            prims,
+            empty: built.cells.reference_count() == 0,
+            geometry: built.geometry,
+            cells: built.cells,
+            stats: built.stats,
+        };
+        #[cfg(debug_assertions)]
+        if let Err(e) = grid.validate() {
+            panic!("grid invariant broken after build: {e}");
+        }
+        Ok(grid)
+    }
+
+    /// The grid's geometry (bounds, resolution, boundaries).
+    #[must_use]
+    pub fn geometry(&self) -> &GridGeometry<T> {
+        &self.geometry
+    }
+
+    /// The cell lists.
+    #[must_use]
+    pub fn cells(&self) -> &CellLists {
+        &self.cells
+    }
+
+    /// The indexed primitives.
+    #[must_use]
+    pub fn primitives(&self) -> &'a P {
+        self.prims
+    }
+
+    /// Checks the structure's invariants: offsets monotone and covering the
+    /// reference array, each cell's references ascending, unique, in range,
+    /// and each referenced primitive's bounds touching the cell.
+    ///
+    /// # Errors
+    /// A message naming the first broken invariant.
+    pub fn validate(&self) -> Result<(), String> {
+        let offsets = self.cells.offsets();
+        if offsets.len() != self.geometry.cell_count() + 1 {
+            return Err(format!(
+                "{} offsets for {} cells",
+                offsets.len(),
+                self.geometry.cell_count()
+            ));
+        }
+        if offsets[0] != 0 || *offsets.last().unwrap_or(&0) as usize != self.cells.reference_count()
+        {
+            return Err("offsets do not span the reference array".into());
+        }
+        if let Some(i) = offsets.windows(2).position(|w| w[0] > w[1]) {
+            return Err(format!("offsets decrease at cell {i}"));
+        }
+        let n = self.prims.len();
+        for c in 0..self.geometry.cell_count() {
+            let refs = self.cells.cell(c);
+            if let Some(w) = refs.windows(2).find(|w| w[0] >= w[1]) {
+                return Err(format!(
+                    "cell {c}: references not strictly ascending at {w:?}"
+                ));
+            }
+            let cell_box = self.geometry.cell_bounds(self.geometry.cell_coords(c));
+            for &p in refs {
+                if p as usize >= n {
+                    return Err(format!(
+                        "cell {c}: reference {p} out of range ({n} primitives)"
+                    ));
+                }
+                if !self.prims.bounds(p as usize).overlaps(&cell_box) {
+                    return Err(format!("cell {c}: primitive {p} lies outside the cell"));
+                }
+            }
+        }
+        Ok(())
+    }
+}

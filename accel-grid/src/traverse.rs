@@ -1,0 +1,171 @@
+//! Queries: the beam-walked DDA with mailboxing and robust early termination.
+
+use crate::cells::CellBox;
+use crate::dda::BeamWalk;
+use crate::grid::Grid;
+use accel_core::{
+    Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
+    TraversalCounters, TraversalRay, nearer, validate_region,
+};
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+    /// Calls `f` with the reference list of every cell in `cells`.
+    #[inline]
+    fn for_cells(&self, cells: CellBox, mut f: impl FnMut(&[u32])) {
+        if cells.lo == cells.hi {
+            f(self.cells.cell(self.geometry.linear_index(cells.lo)));
+        } else {
+            for c in cells.iter() {
+                f(self.cells.cell(self.geometry.linear_index(c)));
+            }
+        }
+    }
+
+    /// The nearest hit: walk front to back, and stop once the beam's front has
+    /// passed the best hit by the hit tolerance (a hit found in one cell may
+    /// lie beyond it; the seed's termination trap).
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(None);
+        }
+        let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
+            return Ok(None);
+        };
+        let mut mailbox = Mailbox::new();
+        let mut best: Option<Hit<T>> = None;
+        let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
+        let mut cells = first;
+        loop {
+            self.for_cells(cells, |refs| {
+                counter.node();
+                for &p in refs {
+                    if mailbox.seen(p) {
+                        continue;
+                    }
+                    counter.prim();
+                    let t_max = best.map_or(ray.t_max, |b| b.t);
+                    if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
+                        best = nearer(best, Hit::new(p, h));
+                    }
+                }
+            });
+            let limit = match best {
+                Some(b) => tr.t_end.min(b.t + tr.t_tol),
+                None => tr.t_end,
+            };
+            match walk.advance(limit) {
+                Some(next) => cells = next,
+                None => return Ok(best),
+            }
+        }
+    }
+
+    /// Any hit: the same walk, returning at the first hit in `[t_min, t_max]`.
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(false);
+        }
+        let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
+            return Ok(false);
+        };
+        let mut mailbox = Mailbox::new();
+        let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
+        let mut cells = first;
+        loop {
+            let mut found = false;
+            self.for_cells(cells, |refs| {
+                counter.node();
+                for &p in refs {
+                    if found || mailbox.seen(p) {
+                        continue;
+                    }
+                    counter.prim();
+                    found = self
+                        .prims
+                        .intersect(p as usize, &tr.prepared, ray.t_max)
+                        .is_some();
+                }
+            });
+            if found {
+                return Ok(true);
+            }
+            match walk.advance(tr.t_end) {
+                Some(next) => cells = next,
+                None => return Ok(false),
+            }
+        }
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
+    fn bounds(&self) -> Aabb<T> {
+        if self.empty {
+            Aabb::empty()
+        } else {
+            *self.geometry.bounds()
+        }
+    }
+
+    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, &mut ())
+    }
+
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
+        self.any(ray, &mut ())
+    }
+
+    fn intersect_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, counters)
+    }
+
+    fn occluded_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<bool, QueryError> {
+        self.any(ray, counters)
+    }
+
+    /// Gathers the references of every cell near the region (grown by a
+    /// rounding allowance, so that a primitive the exact test accepts is never
+    /// missed), then keeps those the primitive's own overlap test accepts.
+    fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
+        validate_region(region)?;
+        if region.is_empty() || self.empty {
+            return Ok(Vec::new());
+        }
+        let scale = region
+            .max_abs_coordinate()
+            .max(self.geometry.bounds().max_abs_coordinate());
+        let margin = T::gamma(64) * scale;
+        let grown = Aabb {
+            min: region.min.map(|x| (x - margin).next_down()),
+            max: region.max.map(|x| (x + margin).next_up()),
+        };
+        let Some(cells) = self.geometry.cells_overlapping(&grown) else {
+            return Ok(Vec::new());
+        };
+        let mut found: Vec<u32> = Vec::new();
+        for c in cells.iter() {
+            found.extend_from_slice(self.cells.cell(self.geometry.linear_index(c)));
+        }
+        found.sort_unstable();
+        found.dedup();
+        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
+        Ok(found)
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}

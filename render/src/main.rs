@@ -1,0 +1,2 @@
+//! The shared `render` binary (to come, issue 6).
+fn main() {}
