@@ -5,6 +5,11 @@
 //! mesh used by several nodes is instanced once per node. Every triangle
 //! primitive is read (`TRIANGLES`, `TRIANGLE_STRIP`, `TRIANGLE_FAN`; `u8`,
 //! `u16`, `u32` or no indices); points and lines are refused, never dropped.
+//!
+//! Malformed files are refused with a [`LoadError`], never a panic: accessors
+//! are checked (component type, element shape, extent within their buffer
+//! view and buffer) before they are read, and a node hierarchy with a cycle
+//! is refused. Skins and morph targets are ignored (the rest pose is used).
 
 use crate::{MeshError, TriangleMesh, Vec3};
 use std::path::{Path, PathBuf};
@@ -45,6 +50,28 @@ pub enum LoadError {
         mesh: String,
         /// Primitive index.
         primitive: usize,
+    },
+    /// An accessor cannot be read as its role requires.
+    #[error("{path}: mesh {mesh} primitive {primitive}: the {attribute} accessor {problem}")]
+    BadAccessor {
+        /// The file.
+        path: PathBuf,
+        /// Mesh index (and name).
+        mesh: String,
+        /// Primitive index.
+        primitive: usize,
+        /// `POSITION` or `indices`.
+        attribute: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// A node is its own ancestor.
+    #[error("{path}: node {node} is its own ancestor (the node hierarchy has a cycle)")]
+    NodeCycle {
+        /// The file.
+        path: PathBuf,
+        /// The node met again.
+        node: usize,
     },
     /// The geometry is invalid (non-finite coordinates, bad indices).
     #[error("{path}: {source}")]
@@ -128,6 +155,95 @@ fn triangles(mode: gltf::mesh::Mode, idx: &[u32]) -> Vec<[u32; 3]> {
     }
 }
 
+/// Checks that `accessor` holds elements of one of `types` × `dims` and lies
+/// within its buffer view and buffer, so that the `gltf` reader (which
+/// asserts or slices on these) can read it; a problem is described in words.
+fn check_accessor(
+    accessor: &gltf::Accessor<'_>,
+    types: &[gltf::accessor::DataType],
+    dims: gltf::accessor::Dimensions,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    if !types.contains(&accessor.data_type()) || accessor.dimensions() != dims {
+        return Err(format!(
+            "holds {:?} {:?} elements, expected {:?} of {:?}",
+            accessor.dimensions(),
+            accessor.data_type(),
+            dims,
+            types
+        ));
+    }
+    let size = accessor.size();
+    let count = accessor.count();
+    if count == 0 {
+        return Ok(());
+    }
+    if let Some(view) = accessor.view() {
+        let stride = view.stride().unwrap_or(size);
+        check_extent(&view, accessor.offset(), stride, size, count, buffers)?;
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        if n == 0 || n > count {
+            return Err(format!("has {n} sparse entries for {count} elements"));
+        }
+        let indices = sparse.indices();
+        let index_size = indices.index_type().size();
+        check_extent(
+            &indices.view(),
+            indices.offset(),
+            index_size,
+            index_size,
+            n,
+            buffers,
+        )?;
+        let values = sparse.values();
+        check_extent(&values.view(), values.offset(), size, size, n, buffers)?;
+    }
+    Ok(())
+}
+
+/// Checks that `count` elements of `size` bytes every `stride` bytes from
+/// `offset` lie within `view`, and `view` within its buffer.
+fn check_extent(
+    view: &gltf::buffer::View<'_>,
+    offset: usize,
+    stride: usize,
+    size: usize,
+    count: usize,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    if stride < size {
+        return Err(format!(
+            "has a byte stride of {stride}, less than its element size {size}"
+        ));
+    }
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|b| b.checked_add(size))
+        .and_then(|b| b.checked_add(offset));
+    if end.is_none_or(|e| e > view.length()) {
+        return Err(format!(
+            "reaches past the end of buffer view {} ({} bytes)",
+            view.index(),
+            view.length()
+        ));
+    }
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+    if view
+        .offset()
+        .checked_add(view.length())
+        .is_none_or(|e| e > buffer_len)
+    {
+        return Err(format!(
+            "reads buffer view {}, which reaches past the end of buffer {} ({buffer_len} bytes)",
+            view.index(),
+            view.buffer().index()
+        ));
+    }
+    Ok(())
+}
+
 struct Loader<'a> {
     path: &'a Path,
     buffers: &'a [gltf::buffer::Data],
@@ -137,7 +253,18 @@ struct Loader<'a> {
 }
 
 impl Loader<'_> {
-    fn node(&mut self, node: &gltf::Node<'_>, parent: glam::DMat4) -> Result<(), LoadError> {
+    fn node(
+        &mut self,
+        node: &gltf::Node<'_>,
+        parent: glam::DMat4,
+        ancestors: &mut Vec<usize>,
+    ) -> Result<(), LoadError> {
+        if ancestors.contains(&node.index()) {
+            return Err(LoadError::NodeCycle {
+                path: self.path.to_owned(),
+                node: node.index(),
+            });
+        }
         let local = glam::Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
@@ -161,9 +288,11 @@ impl Loader<'_> {
                 aspect_ratio,
             });
         }
+        ancestors.push(node.index());
         for child in node.children() {
-            self.node(&child, world)?;
+            self.node(&child, world, ancestors)?;
         }
+        ancestors.pop();
         Ok(())
     }
 
@@ -182,22 +311,64 @@ impl Loader<'_> {
                     mode: mode_name(mode),
                 });
             }
-            let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(positions) = reader.read_positions() else {
+            use gltf::accessor::{DataType, Dimensions};
+            let bad = |attribute, problem| LoadError::BadAccessor {
+                path: self.path.to_owned(),
+                mesh: mesh_label(mesh),
+                primitive: p,
+                attribute,
+                problem,
+            };
+            let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
                 return Err(LoadError::MissingPositions {
                     path: self.path.to_owned(),
                     mesh: mesh_label(mesh),
                     primitive: p,
                 });
             };
+            check_accessor(
+                &position_accessor,
+                &[DataType::F32],
+                Dimensions::Vec3,
+                self.buffers,
+            )
+            .map_err(|e| bad("POSITION", e))?;
+            if let Some(index_accessor) = primitive.indices() {
+                check_accessor(
+                    &index_accessor,
+                    &[DataType::U8, DataType::U16, DataType::U32],
+                    Dimensions::Scalar,
+                    self.buffers,
+                )
+                .map_err(|e| bad("indices", e))?;
+            }
+            let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
             let base = self.positions.len();
-            self.positions.extend(positions.map(|q| {
-                let v = world.transform_point3(glam::Vec3::from(q).as_dvec3());
-                Vec3::from(v)
-            }));
+            if position_accessor.count() > 0 {
+                let positions = reader
+                    .read_positions()
+                    .ok_or_else(|| bad("POSITION", "cannot be read".to_owned()))?;
+                self.positions.extend(positions.map(|q| {
+                    let v = world.transform_point3(glam::Vec3::from(q).as_dvec3());
+                    Vec3::from(v)
+                }));
+            }
+            if self.positions.len() > u32::MAX as usize {
+                return Err(LoadError::Mesh {
+                    path: self.path.to_owned(),
+                    source: MeshError::TooManyTriangles {
+                        count: self.positions.len(),
+                    },
+                });
+            }
             let count = (self.positions.len() - base) as u32;
-            let local: Vec<u32> = match reader.read_indices() {
-                Some(ix) => ix.into_u32().collect(),
+            let local: Vec<u32> = match primitive.indices() {
+                Some(a) if a.count() == 0 => Vec::new(),
+                Some(_) => reader
+                    .read_indices()
+                    .ok_or_else(|| bad("indices", "cannot be read".to_owned()))?
+                    .into_u32()
+                    .collect(),
                 None => (0..count).collect(),
             };
             if let Some(&vertex) = local.iter().find(|&&i| i >= count) {
@@ -212,12 +383,21 @@ impl Loader<'_> {
             }
             // Mirroring transforms flip the winding; keep faces consistent.
             let flip = world.determinant() < 0.0;
-            let offset = u32::try_from(base).unwrap_or(u32::MAX);
-            self.indices
-                .extend(triangles(mode, &local).into_iter().map(|t| {
-                    let t = t.map(|i| i.saturating_add(offset));
-                    if flip { [t[0], t[2], t[1]] } else { t }
-                }));
+            // In range: `base + i < positions.len() <= u32::MAX` (checked above).
+            let offset = base as u32;
+            let new = triangles(mode, &local);
+            if self.indices.len() + new.len() > u32::MAX as usize {
+                return Err(LoadError::Mesh {
+                    path: self.path.to_owned(),
+                    source: MeshError::TooManyTriangles {
+                        count: self.indices.len() + new.len(),
+                    },
+                });
+            }
+            self.indices.extend(new.into_iter().map(|t| {
+                let t = t.map(|i| i + offset);
+                if flip { [t[0], t[2], t[1]] } else { t }
+            }));
         }
         Ok(())
     }
@@ -230,13 +410,18 @@ impl Loader<'_> {
 /// files, non-triangle primitives, missing positions, non-finite coordinates,
 /// out-of-range indices, or a scene without triangles.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
-    let gltf_error = |e: gltf::Error| LoadError::Gltf {
+    let gltf_error = |what: &str, e: gltf::Error| LoadError::Gltf {
         path: path.to_owned(),
-        message: e.to_string(),
+        message: match e {
+            gltf::Error::Io(e) => format!("cannot read {what}: {e}"),
+            e => format!("not a valid glTF file: {e}"),
+        },
     };
-    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(gltf_error)?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::open(path).map_err(|e| gltf_error("the file", e))?;
     let base = path.parent();
-    let buffers = gltf::import_buffers(&document, base, blob).map_err(gltf_error)?;
+    let buffers =
+        gltf::import_buffers(&document, base, blob).map_err(|e| gltf_error("its buffers", e))?;
     let mut loader = Loader {
         path,
         buffers: &buffers,
@@ -249,7 +434,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         .or_else(|| document.scenes().next())
     {
         for node in scene.nodes() {
-            loader.node(&node, glam::DMat4::IDENTITY)?;
+            loader.node(&node, glam::DMat4::IDENTITY, &mut Vec::new())?;
         }
     }
     if loader.indices.is_empty() {
@@ -333,16 +518,195 @@ mod tests {
         }
     }
 
+    /// Standard base64 (for `data:` URIs).
+    fn base64(bytes: &[u8]) -> String {
+        const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut s = String::new();
+        for c in bytes.chunks(3) {
+            let b = |i: usize| u32::from(c.get(i).copied().unwrap_or(0));
+            let n = (b(0) << 16) | (b(1) << 8) | b(2);
+            for i in 0..4 {
+                if i <= c.len() {
+                    s.push(A[(n >> (18 - 6 * i)) as usize & 63] as char);
+                } else {
+                    s.push('=');
+                }
+            }
+        }
+        s
+    }
+
+    /// Writes a `.gltf` with one buffer (positions, then `extra` bytes) and
+    /// the given JSON arrays; returns its path.
+    fn write_gltf(
+        dir: &Path,
+        name: &str,
+        data: &[u8],
+        views: &str,
+        accessors: &str,
+        meshes: &str,
+        nodes: &str,
+    ) -> PathBuf {
+        std::fs::create_dir_all(dir).unwrap();
+        let path = dir.join(name);
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+            "bufferViews":{views},"accessors":{accessors},"meshes":{meshes},"nodes":{nodes}}}"#,
+            data.len(),
+            base64(data)
+        );
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    /// Four vertices of a unit square in z = 0, as f32 bytes.
+    fn square() -> Vec<u8> {
+        [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ]
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
+    }
+
+    const POS: &str = r#"{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}"#;
+
+    #[test]
+    fn u8_strips_are_instanced_through_trs_nodes() {
+        let mut data = square();
+        data.extend([0u8, 1, 2, 3]);
+        let dir =
+            std::env::temp_dir().join(format!("accel-core-gltf-strip-{}", std::process::id()));
+        let path = write_gltf(
+            &dir,
+            "strip.gltf",
+            &data,
+            r#"[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":4}]"#,
+            &format!(
+                r#"[{POS},{{"bufferView":1,"componentType":5121,"count":4,"type":"SCALAR"}}]"#
+            ),
+            r#"[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":5}]}]"#,
+            r#"[{"children":[1,2]},{"mesh":0},{"mesh":0,"translation":[5,0,0],"scale":[2,2,2]}]"#,
+        );
+        let scene = load(&path).unwrap();
+        assert_eq!(scene.mesh.triangle_count(), 4);
+        let b = scene.mesh.bounds();
+        assert_eq!((b.min.x, b.max.x, b.max.y), (0.0, 7.0, 2.0));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn malformed_accessors_and_hierarchies_are_refused_not_panicked_on() {
+        let dir = std::env::temp_dir().join(format!("accel-core-gltf-bad-{}", std::process::id()));
+        let data = square();
+        let view = r#"[{"buffer":0,"byteLength":48}]"#;
+        let tri = r#"[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}]"#;
+        // Float indices (the gltf reader would hit `unreachable!`).
+        let p = write_gltf(
+            &dir,
+            "float_indices.gltf",
+            &data,
+            view,
+            &format!(
+                r#"[{POS},{{"bufferView":0,"componentType":5126,"count":3,"type":"SCALAR"}}]"#
+            ),
+            tri,
+            r#"[{"mesh":0}]"#,
+        );
+        let err = load(&p).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                LoadError::BadAccessor {
+                    attribute: "indices",
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        // Positions past the end of their view.
+        let p = write_gltf(
+            &dir,
+            "past_end.gltf",
+            &data,
+            view,
+            r#"[{"bufferView":0,"componentType":5126,"count":5,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]"#,
+            r#"[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        let err = load(&p).unwrap_err();
+        assert!(err.to_string().contains("past the end"), "{err}");
+        // Positions of the wrong shape.
+        let p = write_gltf(
+            &dir,
+            "vec2.gltf",
+            &data,
+            view,
+            r#"[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC2","min":[0,0],"max":[1,1]}]"#,
+            r#"[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        assert!(load(&p).is_err());
+        // No vertices at all: an empty scene, not an underflow.
+        let p = write_gltf(
+            &dir,
+            "empty_accessor.gltf",
+            &data,
+            view,
+            r#"[{"bufferView":0,"componentType":5126,"count":0,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]"#,
+            r#"[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        assert!(matches!(
+            load(&p).unwrap_err(),
+            LoadError::NoTriangles { .. }
+        ));
+        // A node that is its own grandparent.
+        let p = write_gltf(
+            &dir,
+            "cycle.gltf",
+            &data,
+            view,
+            &format!("[{POS}]"),
+            r#"[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+            r#"[{"children":[1]},{"children":[0],"mesh":0}]"#,
+        );
+        let err = load(&p).unwrap_err();
+        assert!(
+            err.to_string().contains("cycle") || matches!(err, LoadError::Gltf { .. }),
+            "{err}"
+        );
+        // Lines are named.
+        let p = write_gltf(
+            &dir,
+            "lines.gltf",
+            &data,
+            view,
+            &format!("[{POS}]"),
+            r#"[{"primitives":[{"attributes":{"POSITION":0},"mode":1}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        assert!(load(&p).unwrap_err().to_string().contains("LINES"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn missing_and_malformed_files_are_named() {
         let err = load(Path::new("/nonexistent/x.glb")).unwrap_err();
         assert!(err.to_string().contains("/nonexistent/x.glb"), "{err}");
+        assert!(err.to_string().contains("cannot read the file"), "{err}");
         let dir = std::env::temp_dir().join(format!("accel-core-gltf-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let bad = dir.join("bad.gltf");
         std::fs::write(&bad, b"{ not json").unwrap();
         let err = load(&bad).unwrap_err();
         assert!(matches!(err, LoadError::Gltf { .. }), "{err}");
+        assert!(err.to_string().contains("not a valid glTF file"), "{err}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

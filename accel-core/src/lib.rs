@@ -18,6 +18,11 @@
 //! - [`TraversalRay`]: the per-ray tolerances that make traversal conservative
 //!   (after pbrt's `gamma(n)` error bounds and Ize, "Robust BVH ray traversal", 2013).
 //!
+//! The speed-against-accuracy dials live here too: [`moller_trumbore`] (a
+//! faster, non-watertight triangle test, as a [`PrimitiveSet`] wrapper) and
+//! [`spawn`] (where secondary rays start: a fixed epsilon or pbrt-v4's
+//! error-bound offset).
+//!
 //! With the `scenes` feature, [`scenes`] generates the workspace's benchmark
 //! scenes and rays; with `gltf`, [`gltf_scene`] loads glTF 2.0 files.
 //!
@@ -43,10 +48,12 @@ mod error;
 mod hit;
 mod mailbox;
 mod mesh;
+pub mod moller_trumbore;
 mod primitive;
 mod ray;
 mod real;
 mod robust;
+pub mod spawn;
 mod sphere;
 pub mod triangle;
 mod vec3;
@@ -64,6 +71,7 @@ pub use error::BuildError;
 pub use hit::{Hit, PrimHit, nearer};
 pub use mailbox::Mailbox;
 pub use mesh::{MeshError, TriangleMesh};
+pub use moller_trumbore::{MollerTrumboreMesh, TriangleTest};
 pub use primitive::{Primitive, PrimitiveSet};
 pub use ray::{PreparedRay, QueryError, Ray};
 pub use real::Real;

@@ -1,6 +1,6 @@
 //! Indexed triangle meshes: shared vertices, triangles as index triples.
 
-use crate::triangle::{intersect_triangle, triangle_overlaps_box};
+use crate::triangle::{clip_triangle_bounds, intersect_triangle, triangle_overlaps_box};
 use crate::{Aabb, PreparedRay, PrimHit, PrimitiveSet, Real, Vec3};
 
 /// Why a mesh was refused.
@@ -175,6 +175,12 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         let [p0, p1, p2] = self.triangle(i);
         triangle_overlaps_box(p0, p1, p2, b)
+    }
+
+    #[inline]
+    fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
+        let [p0, p1, p2] = self.triangle(i);
+        clip_triangle_bounds(p0, p1, p2, b)
     }
 }
 

@@ -21,6 +21,8 @@ use crate::{Aabb, PreparedRay, PrimHit, Real};
 ///   the accelerators' conservative traversal allows for.
 /// - [`Primitive::overlaps_box`] never answers `false` for a box the primitive
 ///   truly meets; it may answer `true` for a box within rounding distance.
+/// - [`Primitive::clipped_bounds`] holds every point of the primitive that lies
+///   in the box (it may hold more), and lies inside the box.
 pub trait Primitive<T: Real>: Sync {
     /// A box that holds the primitive.
     fn bounds(&self) -> Aabb<T>;
@@ -33,6 +35,20 @@ pub trait Primitive<T: Real>: Sync {
     /// are referenced only by the cells they really touch.
     fn overlaps_box(&self, b: &Aabb<T>) -> bool {
         self.bounds().overlaps(b)
+    }
+
+    /// A box holding every point of the primitive that lies in the closed box
+    /// `b`, itself inside `b`; empty (see [`Aabb::is_empty`]) when the
+    /// primitive surely misses `b`. kD-trees use it for "perfect splits"
+    /// (Wald & Havran 2006): a primitive's events are made from its part in
+    /// the node, not from its whole bounds.
+    ///
+    /// It must be conservative: never smaller than the true part of the
+    /// primitive in `b`, whatever the rounding. The default,
+    /// `bounds() ∩ b`, is; shapes with an exact clipper override it
+    /// ([`crate::Triangle`] clips with Sutherland–Hodgman logic).
+    fn clipped_bounds(&self, b: &Aabb<T>) -> Aabb<T> {
+        self.bounds().intersection(b)
     }
 }
 
@@ -57,6 +73,13 @@ pub trait PrimitiveSet<T: Real>: Sync {
 
     /// Whether primitive `i` meets the closed box `b` (conservatively).
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool;
+
+    /// A box holding every point of primitive `i` inside the closed box `b`,
+    /// itself inside `b` (empty when the primitive surely misses `b`), as
+    /// [`Primitive::clipped_bounds`]. The default is `bounds(i) ∩ b`.
+    fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
+        self.bounds(i).intersection(b)
+    }
 }
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
@@ -76,6 +99,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         self[i].overlaps_box(b)
     }
+    #[inline]
+    fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
+        self[i].clipped_bounds(b)
+    }
 }
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
@@ -94,5 +121,9 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
     #[inline]
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         self[i].overlaps_box(b)
+    }
+    #[inline]
+    fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
+        self[i].clipped_bounds(b)
     }
 }

@@ -54,6 +54,8 @@ pub trait Real:
     const NEG_INFINITY: Self;
     /// The largest finite value.
     const MAX: Self;
+    /// The smallest positive normal value.
+    const MIN_POSITIVE: Self;
     /// Half the distance from 1 to the next float: the unit roundoff `u`
     /// (pbrt's `MachineEpsilon`).
     const UNIT_ROUNDOFF: Self;
@@ -102,10 +104,29 @@ pub trait Real:
     fn to_i64_saturating(self) -> i64;
 
     /// `a * b - c * d`, computed so that its sign is exact whenever the inputs
-    /// are exact: in `f64` for `f32` inputs (products of two `f32` are exact in
-    /// `f64`), and with an error-free product expansion for `f64` inputs when
-    /// the plain result is zero (after Woop, Benthin & Wald 2013, section 3.3).
+    /// are exact, and its value accurate to a few ulps (the triangle test
+    /// derives `t`, `u`, `v` from these values, not only the hit from their
+    /// signs): in `f64` for `f32` inputs (products of two `f32` are exact in
+    /// `f64`), and for `f64` inputs with an error-free product expansion
+    /// whenever the products cancel (after Woop, Benthin & Wald 2013, section 3.3).
     fn diff_of_products(a: Self, b: Self, c: Self, d: Self) -> Self::Wide;
+
+    /// The hit parameter `tw`, computed in [`Real::Wide`], rounded to `Self`
+    /// if it is a hit in `[t_min, t_max]`: the rounded value lies in the
+    /// window, and `Self` represents it faithfully. A parameter beyond
+    /// `Self`'s range is no hit: not finite (a tiny direction), or below the
+    /// normal range without being exactly 0 (a huge direction), where
+    /// rounding would report a point far from the primitive, even one behind
+    /// `t_min` as `-0.0` (see bug 3 in the tests crate). Primitive tests
+    /// accept their hits through this one rule.
+    #[inline]
+    #[must_use]
+    fn hit_parameter(tw: Self::Wide, t_min: Self, t_max: Self) -> Option<Self> {
+        let t = Self::from_wide(tw);
+        let representable =
+            t.is_finite() && (t.abs() >= Self::MIN_POSITIVE || tw == <Self::Wide as Real>::ZERO);
+        (representable && t >= t_min && t <= t_max).then_some(t)
+    }
 
     /// pbrt's `gamma(n) = n·u / (1 − n·u)`: a bound on the relative error of `n`
     /// successive roundings (Higham 2002, §3.1).
@@ -136,14 +157,26 @@ fn two_product_f64(a: f64, b: f64) -> (f64, f64) {
     (p, e)
 }
 
-/// `a*b - c*d` with the sign of the exact result, for the rare zero case.
+/// Knuth's error-free sum: `a + b = s + err` exactly.
+#[inline]
+fn two_sum_f64(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// `a*b - c*d` with the sign of the exact result and a value accurate to a
+/// few ulps, for products that cancel.
 #[cold]
 fn diff_of_products_f64_exact(a: f64, b: f64, c: f64, d: f64) -> f64 {
     let (p, pe) = two_product_f64(a, b);
     let (q, qe) = two_product_f64(c, d);
-    // p - q is exact here (the caller saw it round to zero, so p == q or both tiny);
-    // the residual decides the sign.
-    (p - q) + (pe - qe)
+    // p - q is exact here (the caller saw the products cancel, so they are
+    // within a factor of 2: Sterbenz); the residuals carry the rest.
+    let (e, e_err) = two_sum_f64(pe, -qe);
+    let r = (p - q) + e;
+    // A zero sum is exact, and the exact result is then e's own rounding error.
+    if r == 0.0 { e_err } else { r }
 }
 
 macro_rules! impl_real {
@@ -156,6 +189,7 @@ macro_rules! impl_real {
             const INFINITY: Self = <$t>::INFINITY;
             const NEG_INFINITY: Self = <$t>::NEG_INFINITY;
             const MAX: Self = <$t>::MAX;
+            const MIN_POSITIVE: Self = <$t>::MIN_POSITIVE;
             const UNIT_ROUNDOFF: Self = <$t>::EPSILON * 0.5;
             const NAME: &'static str = $name;
 
@@ -250,11 +284,16 @@ impl_real!(f32, u32, "f32", |a: f32, b: f32, c: f32, d: f32| {
 });
 
 impl_real!(f64, u64, "f64", |a: f64, b: f64, c: f64, d: f64| {
-    let r = a * b - c * d;
-    if r == 0.0 {
-        diff_of_products_f64_exact(a, b, c, d)
-    } else {
+    let (p, q) = (a * b, c * d);
+    let r = p - q;
+    // The plain result errs by up to u·(|p| + |q|): a few ulps of r unless the
+    // products cancel. Then (zero included) the products' rounding errors
+    // dominate, and a degenerate triangle's edge functions would be noise
+    // that `t` is computed from (see bug 2 in the tests crate).
+    if r.abs() * 4.0 >= p.abs() + q.abs() {
         r
+    } else {
+        diff_of_products_f64_exact(a, b, c, d)
     }
 });
 
@@ -290,6 +329,39 @@ mod tests {
         let exact = f64::diff_of_products(a, b, 1.0, 1.0);
         // (1+e)(1-e) - 1 = -e², negative.
         assert!(exact < 0.0, "got {exact}");
+    }
+
+    #[test]
+    fn f64_cancelling_products_keep_their_value() {
+        // q is the product's rounding moved one ulp up: the plain difference is
+        // -1 ulp, while the exact one is -1 ulp plus the product's rounding error.
+        let (a, b) = (0.1f64, 0.3f64);
+        let p = a * b;
+        let q = p.next_up();
+        let exact = a.mul_add(b, -p) - (q - p); // both terms exact; one rounding
+        let plain = a * b - q;
+        assert_ne!(plain, exact, "premise: the plain result is off");
+        let got = f64::diff_of_products(a, b, q, 1.0);
+        assert!(
+            (got - exact).abs() <= exact.abs() * 1e-15,
+            "{got} vs {exact}"
+        );
+        // Swapping the products negates the result exactly (watertightness).
+        assert_eq!(f64::diff_of_products(q, 1.0, a, b), -got);
+    }
+
+    #[test]
+    fn hit_parameters_beyond_the_range_are_no_hits() {
+        assert_eq!(f32::hit_parameter(0.5, 0.0, 1.0), Some(0.5));
+        assert_eq!(f32::hit_parameter(1.5, 0.0, 1.0), None);
+        // Exactly zero, either sign: the origin is on the primitive.
+        assert_eq!(f32::hit_parameter(-0.0, 0.0, 1.0), Some(-0.0));
+        // Overflow and underflow of f32; a tiny negative would round to -0.0.
+        assert_eq!(f32::hit_parameter(1e39, 0.0, f32::INFINITY), None);
+        assert_eq!(f32::hit_parameter(1e-40, 0.0, 1.0), None);
+        assert_eq!(f32::hit_parameter(-1e-51, 0.0, 1.0), None);
+        assert_eq!(f64::hit_parameter(1e-310, 0.0, 1.0), None);
+        assert_eq!(f64::hit_parameter(1e-300, 0.0, 1.0), Some(1e-300));
     }
 
     #[test]

@@ -31,9 +31,10 @@ pub struct TraversalRay<T> {
     /// The parameter tolerance of a hit: `delta / max|d_i|`.
     pub t_tol: T,
     /// First parameter to walk: the beam's entry into the bounds, no earlier
-    /// than `t_min − t_tol`.
+    /// than `t_min − t_tol`; always finite.
     pub t_start: T,
-    /// Last parameter to walk: the beam's exit, no later than `t_max + t_tol`.
+    /// Last parameter to walk: the beam's exit, no later than `t_max + t_tol`;
+    /// always finite.
     pub t_end: T,
 }
 
@@ -55,8 +56,11 @@ impl<T: Real> TraversalRay<T> {
         let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach;
         let t_tol = delta / d.abs().max_component() * (T::ONE + T::gamma(2));
         let (t0, t1) = bounds.beam_interval(o, d, delta)?;
-        let t_start = t0.max(ray.t_min - t_tol);
-        let t_end = t1.min(ray.t_max + t_tol);
+        // Finite even for an unbounded interval whose beam entry or exit
+        // overflows (a tiny direction): no hit has an infinite parameter, and
+        // walks place the beam at `d·t_start`, where 0·∞ would be NaN.
+        let t_start = t0.max(ray.t_min - t_tol).max(-T::MAX);
+        let t_end = t1.min(ray.t_max + t_tol).min(T::MAX);
         if !(t_start <= t_end) {
             return None;
         }
@@ -93,8 +97,11 @@ impl<T: Real> TraversalRay<T> {
                 (T::INFINITY, T::NEG_INFINITY)
             };
         }
-        let a = (s - self.delta - o) / d;
-        let b = (s + self.delta - o) / d;
+        // The offset from the origin first: `s − delta` alone would round
+        // the beam's width away wherever delta is below the rounding unit of
+        // `s` (coordinates far from zero, origins close to the plane).
+        let a = ((s - o) - self.delta) / d;
+        let b = ((s - o) + self.delta) / d;
         let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
         let g = T::gamma(4);
         (lo - lo.abs() * g, hi + hi.abs() * g)
@@ -152,5 +159,29 @@ mod tests {
         assert_eq!(tr.plane_band(2, 0.5), (f64::NEG_INFINITY, f64::INFINITY));
         let (lo, hi) = tr.plane_band(2, 0.75);
         assert!(lo > hi);
+    }
+
+    #[test]
+    fn plane_band_keeps_the_beam_width_far_from_the_origin() {
+        // In f32 at 1e4 the rounding unit (about 1e-3) dwarfs delta (about
+        // 4e-6 for a ray this close to the box): the band must still span
+        // the beam's whole width, `2·delta / |d|`.
+        let s = 10_000.0f32;
+        let b = Aabb::new(
+            Vec3::new(s - 1.0, s - 1.0, s - 1.0),
+            Vec3::new(s + 1.0, s + 1.0, s + 1.0),
+        );
+        let r = Ray::new(Vec3::new(s - 0.5, s, s), Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        let tr = TraversalRay::new(&r, &b).unwrap();
+        assert!(
+            tr.delta < 1e-4 && s - tr.delta == s,
+            "premise: delta is lost in s − delta"
+        );
+        let (lo, hi) = tr.plane_band(0, s);
+        assert!(
+            lo <= 0.5 - tr.delta && hi >= 0.5 + tr.delta,
+            "band [{lo}, {hi}], delta {}",
+            tr.delta
+        );
     }
 }

@@ -73,10 +73,7 @@ impl<T: Real> Primitive<T> for Sphere<T> {
             if x <= y { (x, y) } else { (y, x) }
         };
         let t_min = ray.ray.t_min;
-        let pick = |tw: T::Wide| {
-            let t = T::from_wide(tw);
-            (t >= t_min && t <= t_max && t.is_finite()).then_some(t)
-        };
+        let pick = |tw: T::Wide| T::hit_parameter(tw, t_min, t_max);
         let (t, tw) = match pick(t0) {
             Some(t) => (t, t0),
             None => (pick(t1)?, t1),
@@ -188,5 +185,18 @@ mod tests {
         assert!(!s.bounds().is_finite());
         let s = Sphere::new(Vec3::new(0.0f32, 0.0, 0.0), f32::NAN);
         assert!(!s.bounds().is_finite());
+    }
+
+    #[test]
+    fn clipped_bounds_is_the_box_intersection_default() {
+        let s = Sphere::new(Vec3::new(0.0f64, 0.0, 0.0), 1.0);
+        let b = Aabb::new(Vec3::new(0.5, -2.0, -0.25), Vec3::new(3.0, 0.0, 0.75));
+        let c = s.clipped_bounds(&b);
+        assert_eq!(c, s.bounds().intersection(&b));
+        // It holds the sphere's points inside the box, e.g. (1, 0, 0) and (0.6, -0.8, 0).
+        assert!(c.contains_point(Vec3::new(1.0, 0.0, 0.0)));
+        assert!(c.contains_point(Vec3::new(0.6, -0.8, 0.0)));
+        let far = Aabb::new(Vec3::splat(2.0), Vec3::splat(3.0));
+        assert!(s.clipped_bounds(&far).is_empty());
     }
 }

@@ -44,15 +44,17 @@ pub fn intersect_triangle<T: Real>(
     if det == zero {
         return None;
     }
-    let az = (s.z * a[kz]).to_wide();
-    let bz = (s.z * b[kz]).to_wide();
-    let cz = (s.z * c[kz]).to_wide();
+    // Scaled depths in the wide type: in T they can underflow to 0 (a huge
+    // direction), which would report t = 0 for any triangle the line meets.
+    let sz = s.z.to_wide();
+    let (az, bz, cz) = (
+        sz * a[kz].to_wide(),
+        sz * b[kz].to_wide(),
+        sz * c[kz].to_wide(),
+    );
     let t_scaled = u * az + v * bz + w * cz;
-    let t = T::from_wide(t_scaled / det);
-    // A parameter beyond T's range (tiny directions) is no hit.
-    if !(t >= ray.ray.t_min && t <= t_max && t.is_finite()) {
-        return None;
-    }
+    // A parameter beyond T's range (tiny or huge directions) is no hit.
+    let t = T::hit_parameter(t_scaled / det, ray.ray.t_min, t_max)?;
     let inv_det = <T::Wide as Real>::ONE / det;
     Some(PrimHit {
         t,
@@ -131,6 +133,242 @@ pub fn triangle_overlaps_box<T: Real>(p0: Vec3<T>, p1: Vec3<T>, p2: Vec3<T>, b: 
     d.abs() <= r + err
 }
 
+/// The bounds of the part of triangle `p0 p1 p2` inside the closed box `b`,
+/// computed so that they always **contain** the true triangle ∩ box despite
+/// rounding, then intersected with `b` and the triangle's own bounds. Empty
+/// when the triangle surely misses the box.
+///
+/// Sutherland–Hodgman clipping computes each new vertex from the previous
+/// ones, so its errors compound, and an edge nearly parallel to a later
+/// clipping plane can move its crossing arbitrarily far along the edge. This
+/// clipper therefore computes every vertex of the clipped polygon directly
+/// from the input, with an explicit error bound. A vertex of triangle ∩ box
+/// is one of:
+/// 1. a triangle vertex inside the box (exact);
+/// 2. a crossing of a triangle edge with a box face plane (the edge must
+///    cross the plane strictly), kept when it may lie inside the face;
+/// 3. a crossing of a box edge with the triangle, found in the projection
+///    along the box edge's axis by 2D edge functions (kept when the box edge
+///    may pierce the triangle), its height interpolated from barycentric
+///    weights; where the projection is too thin to trust, the triangle's whole
+///    extent on that axis is taken instead.
+///
+/// Only planes the triangle's bounds cross strictly can hold crossings, so a
+/// small triangle straddling one plane costs two edge crossings. Every
+/// candidate whose membership is uncertain under the error bounds is kept:
+/// extra candidates only enlarge the result. The arithmetic runs in
+/// [`Real::Wide`]; the result is rounded outward to `T`.
+#[must_use]
+pub fn clip_triangle_bounds<T: Real>(
+    p0: Vec3<T>,
+    p1: Vec3<T>,
+    p2: Vec3<T>,
+    b: &Aabb<T>,
+) -> Aabb<T> {
+    let tb = Aabb::from_point(p0).union_point(p1).union_point(p2);
+    if b.is_empty() || !tb.overlaps(b) {
+        return Aabb::empty();
+    }
+    if b.contains(&tb) {
+        return tb;
+    }
+    let limit = tb.intersection(b);
+    let w = |v: Vec3<T>| v.map(T::to_wide);
+    let v = [w(p0), w(p1), w(p2)];
+    let (bmin, bmax) = (w(b.min), w(b.max));
+    // The face planes that the triangle's bounds cross strictly.
+    let mut crossed: [[Option<T::Wide>; 2]; 3] = [[None; 2]; 3];
+    for (a, faces) in crossed.iter_mut().enumerate() {
+        for (slot, c) in faces.iter_mut().zip([b.min[a], b.max[a]]) {
+            if tb.min[a] < c && c < tb.max[a] {
+                *slot = Some(c.to_wide());
+            }
+        }
+    }
+    let mut acc = WideBox::<T::Wide>::empty();
+    // 1. Vertices inside the box.
+    for p in [p0, p1, p2] {
+        if b.contains_point(p) {
+            acc.add(w(p), w(p));
+        }
+    }
+    // 2. Edges crossing a face plane.
+    for (a, faces) in crossed.iter().enumerate() {
+        for &c in faces.iter().flatten() {
+            for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                if let Some((lo, hi)) = edge_crossing(v[i], v[j], a, c, bmin, bmax) {
+                    acc.add(lo, hi);
+                }
+            }
+        }
+    }
+    // 3. Box edges piercing the triangle.
+    for a in 0..3 {
+        let (ab, ac) = ((a + 1) % 3, (a + 2) % 3);
+        for &cb in crossed[ab].iter().flatten() {
+            for &cc in crossed[ac].iter().flatten() {
+                let range = (tb.min[a].to_wide(), tb.max[a].to_wide());
+                if let Some((lo_a, hi_a)) = box_edge_crossing(&v, [a, ab, ac], cb, cc, range)
+                    && hi_a >= bmin[a]
+                    && lo_a <= bmax[a]
+                {
+                    let mut lo = Vec3::ZERO;
+                    lo[a] = lo_a;
+                    lo[ab] = cb;
+                    lo[ac] = cc;
+                    let mut hi = lo;
+                    hi[a] = hi_a;
+                    acc.add(lo, hi);
+                }
+            }
+        }
+    }
+    if acc.lo.x > acc.hi.x {
+        return Aabb::empty();
+    }
+    Aabb {
+        min: acc.lo.map(round_down::<T>),
+        max: acc.hi.map(round_up::<T>),
+    }
+    .intersection(&limit)
+}
+
+/// A box in the wide type that grows by corner pairs.
+struct WideBox<W> {
+    lo: Vec3<W>,
+    hi: Vec3<W>,
+}
+
+impl<W: Real> WideBox<W> {
+    fn empty() -> Self {
+        Self {
+            lo: Vec3::splat(W::INFINITY),
+            hi: Vec3::splat(W::NEG_INFINITY),
+        }
+    }
+
+    fn add(&mut self, lo: Vec3<W>, hi: Vec3<W>) {
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
+    }
+}
+
+/// The largest `T` not above `x`.
+fn round_down<T: Real>(x: T::Wide) -> T {
+    let r = T::from_wide(x);
+    if r.to_wide() > x { r.next_down() } else { r }
+}
+
+/// The smallest `T` not below `x`.
+fn round_up<T: Real>(x: T::Wide) -> T {
+    let r = T::from_wide(x);
+    if r.to_wide() < x { r.next_up() } else { r }
+}
+
+/// An absolute error floor for results that may underflow (far below any
+/// coordinate that matters, far above the subnormal rounding unit).
+fn tiny<W: Real>() -> W {
+    W::from_f64(1e-290)
+}
+
+/// Where the edge `p q` crosses the plane `x[a] = c` (which it must cross
+/// strictly), as an interval per axis that holds the true crossing; `None`
+/// when the crossing surely lies outside the box's face.
+fn edge_crossing<W: Real>(
+    p: Vec3<W>,
+    q: Vec3<W>,
+    a: usize,
+    c: W,
+    bmin: Vec3<W>,
+    bmax: Vec3<W>,
+) -> Option<(Vec3<W>, Vec3<W>)> {
+    if !((p[a] < c && c < q[a]) || (q[a] < c && c < p[a])) {
+        return None;
+    }
+    // t in (0, 1) exactly; its computed value has a relative error of a few
+    // roundings, so clamping it only moves it toward the truth. An overflow
+    // (coordinates near the largest float) gives up on the interpolation.
+    let raw = (c - p[a]) / (q[a] - p[a]);
+    let t = raw.max(W::ZERO).min(W::ONE);
+    let mut lo = Vec3::splat(c);
+    let mut hi = lo;
+    for ax in [(a + 1) % 3, (a + 2) % 3] {
+        let (pa, qa) = (p[ax], q[ax]);
+        let (edge_lo, edge_hi) = (pa.min(qa), pa.max(qa));
+        let x = pa + t * (qa - pa);
+        // t: 3 roundings (relative), the difference, product and sum: 3 more.
+        let err = W::gamma(8) * (pa.abs() + pa.abs() + qa.abs()) + tiny::<W>();
+        let (l, h) = if raw.is_finite() && x.is_finite() && err.is_finite() {
+            ((x - err).max(edge_lo), (x + err).min(edge_hi))
+        } else {
+            (edge_lo, edge_hi)
+        };
+        if h < bmin[ax] || l > bmax[ax] {
+            return None;
+        }
+        lo[ax] = l;
+        hi[ax] = h;
+    }
+    Some((lo, hi))
+}
+
+/// A 2D edge function `(q − p) × (x − p)` with a bound on its rounding error.
+fn orient<W: Real>(p: (W, W), q: (W, W), x: (W, W)) -> (W, W) {
+    let t1 = (q.0 - p.0) * (x.1 - p.1);
+    let t2 = (q.1 - p.1) * (x.0 - p.0);
+    // Each difference and product rounds (three roundings per term), then the
+    // subtraction: gamma(4) of the terms, doubled for margin.
+    let err = W::gamma(8) * (t1.abs() + t2.abs()) + tiny::<W>();
+    (t1 - t2, err)
+}
+
+/// Where the box edge `{x[b] = cb, x[c] = cc}` (axes `[a, b, c]`) pierces the
+/// triangle: an interval of `x[a]` that holds the crossing, or `None` when the
+/// edge surely misses the triangle. `range` is the triangle's extent on `a`,
+/// the answer when the projection is too thin to interpolate.
+fn box_edge_crossing<W: Real>(
+    v: &[Vec3<W>; 3],
+    [a, b, c]: [usize; 3],
+    cb: W,
+    cc: W,
+    range: (W, W),
+) -> Option<(W, W)> {
+    let p = v.map(|p| (p[b], p[c]));
+    let x = (cb, cc);
+    let (e0, r0) = orient(p[1], p[2], x);
+    let (e1, r1) = orient(p[2], p[0], x);
+    let (e2, r2) = orient(p[0], p[1], x);
+    let pos = e0 > r0 || e1 > r1 || e2 > r2;
+    let neg = e0 < -r0 || e1 < -r1 || e2 < -r2;
+    if pos && neg {
+        return None;
+    }
+    // Barycentric interpolation of x[a]; trusted only when the projected area
+    // is well above its error.
+    let d = e0 + e1 + e2;
+    let rd = r0 + r1 + r2 + W::gamma(2) * (e0.abs() + e1.abs() + e2.abs());
+    let fallback = Some(range);
+    if !(d.abs() > rd + rd) || !d.is_finite() {
+        return fallback;
+    }
+    let clamp = |l: W| l.max(W::ZERO).min(W::ONE);
+    let (l1, l2) = (clamp(e1 / d), clamp(e2 / d));
+    let (d1, d2) = (v[1][a] - v[0][a], v[2][a] - v[0][a]);
+    let xa = v[0][a] + l1 * d1 + l2 * d2;
+    // |d_true| >= |d|/2 here, so each weight is off by at most
+    // 2·(r_i + rd)/|d| plus its own rounding.
+    let dl1 = (r1 + rd) * W::from_f64(2.0) / d.abs() + W::gamma(2);
+    let dl2 = (r2 + rd) * W::from_f64(2.0) / d.abs() + W::gamma(2);
+    let err = dl1 * d1.abs()
+        + dl2 * d2.abs()
+        + W::gamma(8) * (v[0][a].abs() + d1.abs() + d2.abs())
+        + tiny::<W>();
+    if !(xa.is_finite() && err.is_finite()) {
+        return fallback;
+    }
+    Some(((xa - err).max(range.0), (xa + err).min(range.1)))
+}
+
 /// A triangle that owns its three vertices: the simplest [`Primitive`] for
 /// soups. Meshes with shared vertices use [`crate::TriangleMesh`] instead.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,9 +378,17 @@ pub struct Triangle<T> {
 }
 
 impl<T: Real> Primitive<T> for Triangle<T> {
+    /// The vertices' bounds; infinite when a vertex is not finite (min and
+    /// max would drop a NaN), so that every build refuses the triangle.
     #[inline]
     fn bounds(&self) -> Aabb<T> {
         let [a, b, c] = self.vertices;
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            return Aabb {
+                min: Vec3::splat(T::NEG_INFINITY),
+                max: Vec3::splat(T::INFINITY),
+            };
+        }
         Aabb::from_point(a).union_point(b).union_point(c)
     }
 
@@ -156,6 +402,12 @@ impl<T: Real> Primitive<T> for Triangle<T> {
     fn overlaps_box(&self, b: &Aabb<T>) -> bool {
         let [p0, p1, p2] = self.vertices;
         triangle_overlaps_box(p0, p1, p2, b)
+    }
+
+    #[inline]
+    fn clipped_bounds(&self, b: &Aabb<T>) -> Aabb<T> {
+        let [p0, p1, p2] = self.vertices;
+        clip_triangle_bounds(p0, p1, p2, b)
     }
 }
 
@@ -289,5 +541,191 @@ mod tests {
         // Touches only the corner (1,1,1) with a vertex.
         let t = [v(1.0, 1.0, 1.0), v(2.0, 1.5, 1.0), v(1.5, 2.0, 3.0)];
         assert!(triangle_overlaps_box(t[0], t[1], t[2], &b));
+    }
+
+    /// A tiny deterministic generator for the clipper's tests.
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.next()
+        }
+    }
+
+    /// Points of the triangle on a dense barycentric lattice, edges included.
+    fn samples(p: [Vec3<f64>; 3], n: u32) -> Vec<Vec3<f64>> {
+        let mut out = Vec::new();
+        for i in 0..=n {
+            for j in 0..=n - i {
+                let (u, v) = (f64::from(i) / f64::from(n), f64::from(j) / f64::from(n));
+                out.push(p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v);
+            }
+        }
+        out
+    }
+
+    /// The clipped box holds every sampled point of the triangle inside the
+    /// box, lies in the box and the triangle's bounds, and is not much larger
+    /// than the sampled part (the sample spacing bounds the difference).
+    fn check_clip<T: Real>(p: [Vec3<f64>; 3], b: &Aabb<f64>, n: u32) {
+        let pt: [Vec3<T>; 3] = p.map(|v| v.cast());
+        let bt: Aabb<T> = b.cast();
+        let exact: [Vec3<f64>; 3] = pt.map(|v| v.cast());
+        let clipped = clip_triangle_bounds(pt[0], pt[1], pt[2], &bt);
+        let tb = Aabb::from_points(pt);
+        let inside: Vec<Vec3<f64>> = samples(exact, n)
+            .into_iter()
+            .filter(|q| bt.cast::<f64>().contains_point(*q) && tb.cast::<f64>().contains_point(*q))
+            .collect();
+        if inside.is_empty() {
+            return;
+        }
+        assert!(
+            !clipped.is_empty(),
+            "{p:?} {b:?}: empty clip of a meeting triangle"
+        );
+        let c64: Aabb<f64> = clipped.cast();
+        // A sample's own rounding (a few f64 ulps of the coordinates) is
+        // allowed for; the f32 clipper rounds outward by whole f32 ulps.
+        let tol = 8.0 * f64::EPSILON * Aabb::from_points(exact).max_abs_coordinate();
+        for q in &inside {
+            assert!(
+                c64.expanded(tol).contains_point(*q),
+                "{p:?} in {b:?}: {q:?} outside {clipped:?}"
+            );
+        }
+        assert!(bt.contains(&clipped) && tb.contains(&clipped));
+        // Tightness: within rounding of a plain Sutherland–Hodgman clip in f64
+        // (accurate to a few ulps here, but not conservative).
+        let reference = sutherland_hodgman(exact, &bt.cast());
+        let slack = 1e-6 * b.max_abs_coordinate().max(1.0);
+        for a in 0..3 {
+            assert!(
+                c64.min[a] >= reference.min[a] - slack,
+                "{p:?} {b:?}: loose min {a}: {c64:?} vs {reference:?}"
+            );
+            assert!(
+                c64.max[a] <= reference.max[a] + slack,
+                "{p:?} {b:?}: loose max {a}: {c64:?} vs {reference:?}"
+            );
+        }
+    }
+
+    /// The textbook clipper: the polygon clipped by each of the six half-spaces.
+    fn sutherland_hodgman(p: [Vec3<f64>; 3], b: &Aabb<f64>) -> Aabb<f64> {
+        let mut poly: Vec<Vec3<f64>> = p.to_vec();
+        for a in 0..3 {
+            for (c, keep_below) in [(b.min[a], false), (b.max[a], true)] {
+                let inside = |q: &Vec3<f64>| if keep_below { q[a] <= c } else { q[a] >= c };
+                let mut out = Vec::new();
+                for k in 0..poly.len() {
+                    let (s, e) = (poly[k], poly[(k + 1) % poly.len()]);
+                    if inside(&s) {
+                        out.push(s);
+                    }
+                    if inside(&s) != inside(&e) {
+                        let t = (c - s[a]) / (e[a] - s[a]);
+                        let mut x = s + (e - s) * t;
+                        x[a] = c;
+                        out.push(x);
+                    }
+                }
+                poly = out;
+            }
+        }
+        Aabb::from_points(poly)
+    }
+
+    #[test]
+    fn clip_holds_dense_samples_of_random_triangles_in_a_1_2_3_box() {
+        let mut rng = Lcg(17);
+        let b = Aabb::new(v::<f64>(0.5, -1.0, 2.0), v(1.5, 1.0, 5.0));
+        for _ in 0..400 {
+            let p = [0; 3].map(|_| {
+                v::<f64>(
+                    rng.range(-0.5, 2.5),
+                    rng.range(-2.0, 2.0),
+                    rng.range(1.0, 6.0),
+                )
+            });
+            check_clip::<f64>(p, &b, 160);
+            check_clip::<f32>(p, &b, 160);
+        }
+    }
+
+    #[test]
+    fn clip_of_a_corner_cut_is_exact_where_it_can_be() {
+        // The plane x + y + z = 1.5 cuts the corner of the unit box; the
+        // triangle is far larger than the box, so every vertex of the clipped
+        // polygon comes from a box edge (case 3): (0.5,0,1)...(1,0.5,0)...
+        let p = [
+            v::<f64>(-10.0, -10.0, 21.5),
+            v(21.5, -10.0, -10.0),
+            v(-10.0, 21.5, -10.0),
+        ];
+        let b = Aabb::new(v(0.0, 0.0, 0.0), v(1.0, 2.0, 3.0));
+        let c = clip_triangle_bounds(p[0], p[1], p[2], &b);
+        // The polygon spans x in [0, 1], y in [0, 1.5], z in [0, 1.5].
+        let want = Aabb::new(v(0.0, 0.0, 0.0), v(1.0, 1.5, 1.5));
+        assert!(c.contains(&want), "{c:?}");
+        for a in 0..3 {
+            assert!((c.max[a] - want.max[a]).abs() < 1e-12, "{c:?}");
+        }
+        check_clip::<f32>(p, &b, 400);
+    }
+
+    #[test]
+    fn clip_in_a_face_plane_through_a_corner_and_missing() {
+        let b = Aabb::new(v::<f64>(0.0, 0.0, 0.0), v(1.0, 2.0, 3.0));
+        // A large triangle lying in the face z = 3: the clip is the face.
+        let p = [v(-5.0, -5.0, 3.0), v(10.0, -5.0, 3.0), v(-5.0, 10.0, 3.0)];
+        let c = clip_triangle_bounds(p[0], p[1], p[2], &b);
+        assert_eq!(c, Aabb::new(v(0.0, 0.0, 3.0), v(1.0, 2.0, 3.0)));
+        // Its bounds overlap the box but the triangle passes beside it.
+        let p = [v(1.5, 0.8, -1.0), v(0.8, 2.5, -1.0), v(1.5, 2.5, 5.0)];
+        assert!(Aabb::from_points(p).overlaps(&b));
+        assert!(clip_triangle_bounds(p[0], p[1], p[2], &b).is_empty());
+        // Touching the box at its corner (1, 2, 3) only.
+        let p = [v(1.0, 2.0, 3.0), v(4.0, 2.5, 3.0), v(2.0, 5.0, 7.0)];
+        let c = clip_triangle_bounds(p[0], p[1], p[2], &b);
+        assert_eq!(c, Aabb::from_point(v(1.0, 2.0, 3.0)));
+        // Degenerate (a segment through the box).
+        let p = [v(-1.0, 1.0, 1.0), v(3.0, 1.0, 2.0), v(1.0, 1.0, 1.5)];
+        check_clip::<f64>(p, &b, 200);
+        let c = clip_triangle_bounds(p[0], p[1], p[2], &b);
+        assert!((c.min.x, c.max.x) == (0.0, 1.0) && (c.min.z - 1.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn clip_is_conservative_far_from_the_origin_in_f32() {
+        // Slivers and near-parallel edges at an offset where f32 spacing is
+        // coarse: the samples (in f64, from the f32 vertices) stay inside.
+        let mut rng = Lcg(99);
+        let o = 4096.0;
+        let b = Aabb::new(
+            v::<f64>(o + 0.25, o - 0.5, o),
+            v(o + 0.75, o + 0.5, o + 1.5),
+        );
+        for _ in 0..300 {
+            let base = v::<f64>(
+                rng.range(o - 1.0, o + 2.0),
+                rng.range(o - 1.0, o + 1.0),
+                rng.range(o - 1.0, o + 2.5),
+            );
+            let e = v::<f64>(
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+            );
+            let f = e * rng.range(-1.0, 1.0) + v(0.0, rng.range(-1e-3, 1e-3), 0.0);
+            check_clip::<f32>([base, base + e, base + f], &b, 120);
+        }
     }
 }

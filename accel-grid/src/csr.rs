@@ -3,7 +3,10 @@
 //! Built in two parallel passes over the items: count the references of each
 //! cell, turn the counts into offsets, then place every reference. An empty
 //! cell costs one `u32`. Each cell's references end up sorted ascending, so the
-//! build is deterministic whatever the thread count.
+//! build is deterministic whatever the thread count. The items are `0..n`
+//! ([`CellLists::build`]) or any list of ids ([`CellLists::build_items`]: the
+//! primitives of one cell, refined by a finer grid); [`CellLists::from_cells`]
+//! assembles lists a structure has put together itself.
 
 use accel_core::BuildError;
 use rayon::prelude::*;
@@ -40,15 +43,85 @@ impl CellLists {
         max_references: u64,
         visitor: &V,
     ) -> Result<Self, BuildError> {
+        Self::build_with(
+            cell_count,
+            item_count as usize,
+            |i| i as u32,
+            max_references,
+            visitor,
+        )
+    }
+
+    /// Builds the lists of `cell_count` cells for the given items: any ids,
+    /// such as the primitives of one cell of a coarser grid (the octree's
+    /// child grids). The lists hold the ids themselves, ascending in each
+    /// cell, and `visitor` is asked about each id of `items`, which must not
+    /// repeat.
+    ///
+    /// # Errors
+    /// [`BuildError::BudgetExceeded`] as [`CellLists::build`].
+    pub fn build_items<V: CellVisitor>(
+        cell_count: usize,
+        items: &[u32],
+        max_references: u64,
+        visitor: &V,
+    ) -> Result<Self, BuildError> {
+        Self::build_with(
+            cell_count,
+            items.len(),
+            |i| items[i],
+            max_references,
+            visitor,
+        )
+    }
+
+    /// Lists with the given references per cell, in cell order, each kept as
+    /// given (a structure that assembles its own cells, such as the octree
+    /// joining its grids into one array, or that marks some cells specially).
+    ///
+    /// # Errors
+    /// [`BuildError::BudgetExceeded`] when the references number more than
+    /// `u32` offsets can address.
+    pub fn from_cells<I, C>(cells: I) -> Result<Self, BuildError>
+    where
+        I: IntoIterator<Item = C>,
+        C: AsRef<[u32]>,
+    {
+        let cells = cells.into_iter();
+        let mut offsets = Vec::with_capacity(cells.size_hint().0 + 1);
+        let mut refs = Vec::new();
+        offsets.push(0);
+        for cell in cells {
+            refs.extend_from_slice(cell.as_ref());
+            let end = u32::try_from(refs.len()).map_err(|_| BuildError::BudgetExceeded {
+                what: "cell references",
+                needed: refs.len() as u64,
+                budget: u64::from(u32::MAX),
+            })?;
+            offsets.push(end);
+        }
+        offsets.shrink_to_fit();
+        refs.shrink_to_fit();
+        Ok(Self { offsets, refs })
+    }
+
+    /// The two-pass build over items `id(0) .. id(len - 1)`.
+    fn build_with<V: CellVisitor>(
+        cell_count: usize,
+        len: usize,
+        id: impl Fn(usize) -> u32 + Sync,
+        max_references: u64,
+        visitor: &V,
+    ) -> Result<Self, BuildError> {
         // slots[c + 1] counts cell c in pass 1, holds its start before pass 2 and
         // its end after it; slots[0] stays 0. The array becomes the offsets.
         let slots: Vec<AtomicU32> = (0..=cell_count).map(|_| AtomicU32::new(0)).collect();
         let cells = &slots[1..];
-        (0..item_count)
+        (0..len)
             .into_par_iter()
             .with_min_len(ITEMS_PER_TASK)
-            .for_each(|item| {
-                visitor.visit(item, |c| {
+            .for_each(|i| {
+                visitor.visit(id(i), |c| {
                     cells[c].fetch_add(1, Ordering::Relaxed);
                 });
             });
@@ -74,10 +147,11 @@ impl CellLists {
         let slots: Vec<AtomicU32> = slots.into_iter().map(AtomicU32::new).collect();
         let refs: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
         let cells = &slots[1..];
-        (0..item_count)
+        (0..len)
             .into_par_iter()
             .with_min_len(ITEMS_PER_TASK)
-            .for_each(|item| {
+            .for_each(|i| {
+                let item = id(i);
                 visitor.visit(item, |c| {
                     let at = cells[c].fetch_add(1, Ordering::Relaxed);
                     refs[at as usize].store(item, Ordering::Relaxed);
@@ -222,6 +296,45 @@ mod tests {
             err,
             BuildError::BudgetExceeded { needed, budget: 150, .. } if needed > 150
         ));
+    }
+
+    #[test]
+    fn item_subsets_hold_their_own_ids() {
+        let items = [3u32, 17, 40, 41, 9_999];
+        let lists = CellLists::build_items(7, &items, u64::MAX, &Modular).unwrap();
+        let mut expected = vec![Vec::new(); 7];
+        for &i in &items {
+            Modular.visit(i, |c| expected[c].push(i));
+        }
+        for e in &mut expected {
+            e.sort_unstable();
+        }
+        for (c, want) in expected.iter().enumerate() {
+            assert_eq!(lists.cell(c), want.as_slice(), "cell {c}");
+        }
+        let all = CellLists::build(7, 50, u64::MAX, &Modular).unwrap();
+        let every: Vec<u32> = (0..50).collect();
+        assert_eq!(
+            CellLists::build_items(7, &every, u64::MAX, &Modular).unwrap(),
+            all
+        );
+        let err = CellLists::build_items(7, &items, 3, &Modular).unwrap_err();
+        assert!(matches!(err, BuildError::BudgetExceeded { budget: 3, .. }));
+    }
+
+    #[test]
+    fn lists_from_given_cells_keep_them_in_order() {
+        let given: Vec<Vec<u32>> = vec![vec![5, 1], vec![], vec![7], vec![], vec![2, 3, 4]];
+        let lists = CellLists::from_cells(&given).unwrap();
+        assert_eq!(lists.cell_count(), 5);
+        for (c, want) in given.iter().enumerate() {
+            assert_eq!(lists.cell(c), want.as_slice(), "cell {c}");
+        }
+        assert_eq!(lists.offsets(), &[0, 2, 2, 3, 3, 6]);
+        assert_eq!(lists.empty_cells(), 2);
+        assert_eq!(lists.max_cell_len(), 3);
+        let none = CellLists::from_cells(Vec::<[u32; 0]>::new()).unwrap();
+        assert_eq!((none.cell_count(), none.reference_count()), (0, 0));
     }
 
     #[test]

@@ -104,7 +104,11 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             2
         };
         let t = self.t_lead[a];
-        if !(t <= limit) {
+        // +∞ is both the sentinel of an axis whose front is in its last cell
+        // and what a crossing beyond T's range rounds to (a tiny direction):
+        // no representable hit lies past it, so the walk ends there even when
+        // `limit` is +∞ too (else the trails would chase +∞ forever).
+        if !(t <= limit) || t == T::INFINITY {
             return None;
         }
         let old_lead = self.lead[a];
