@@ -1,0 +1,86 @@
+//! Mean nodes visited and primitives tested per camera ray, kd-tree beside
+//! the uniform grid, on each generated scene (for tuning and profiling):
+//! `cargo run --release -p accel-kdtree --example ray_costs [scene-name]`
+//! (`ONLY=kdtree-default` traces one structure, e.g. under callgrind).
+
+use accel_core::scenes::GeneratedScene;
+use accel_core::{Accelerator, TraversalCounters};
+use accel_grid::Grid;
+use accel_kdtree::{KdTree, KdTreeParams};
+use std::time::Instant;
+
+#[inline(never)]
+fn costs<A: Accelerator<f32>>(name: &str, a: &A, rays: &[accel_core::Ray<f32>]) {
+    if std::env::var("ONLY").is_ok_and(|o| o != name) {
+        return;
+    }
+    let mut c = TraversalCounters::default();
+    let hits = rays
+        .iter()
+        .filter(|r| a.intersect_counted(r, &mut c).unwrap().is_some())
+        .count();
+    // Best of five untimed-counter runs: the machine may be shared.
+    let mut s = f64::INFINITY;
+    for _ in 0..5 {
+        let start = Instant::now();
+        std::hint::black_box(
+            rays.iter()
+                .filter(|r| a.intersect(r).unwrap().is_some())
+                .count(),
+        );
+        s = s.min(start.elapsed().as_secs_f64());
+    }
+    let n = rays.len() as f64;
+    println!(
+        "  {name:>24}: {:.3} Mrays/s (best of 5), {:.1} nodes, {:.1} prims per ray, {hits} hits",
+        n / s / 1e6,
+        c.nodes as f64 / n,
+        c.prims as f64 / n
+    );
+}
+
+/// Parameters from `KT`, `KI`, `BONUS`, `DEPTH_EXTRA` (added to pbrt's
+/// limit) and `LEAF`, for tuning experiments.
+fn env_params(n: usize) -> KdTreeParams {
+    let get = |k: &str, d: f64| {
+        std::env::var(k)
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(d)
+    };
+    let base = KdTreeParams::default();
+    KdTreeParams {
+        traversal_cost: get("KT", base.traversal_cost),
+        intersect_cost: get("KI", base.intersect_cost),
+        empty_bonus: get("BONUS", base.empty_bonus),
+        max_depth: Some(
+            (f64::from(base.depth_limit(n)) + get("DEPTH_EXTRA", 0.0)).min(64.0) as u32,
+        ),
+        leaf_size: get("LEAF", 0.0) as u32,
+        ..base
+    }
+}
+
+fn main() {
+    let only = std::env::args().nth(1);
+    for scene in GeneratedScene::ALL {
+        if only.as_deref().is_some_and(|o| o != scene.name()) {
+            continue;
+        }
+        let mesh = scene.mesh().cast::<f32>().expect("fits f32");
+        let rays = scene.camera().rays::<f32>(256, 256);
+        println!("{}", scene.name());
+        if scene != GeneratedScene::TeapotInStadium {
+            costs("grid", &Grid::new(&mesh).unwrap(), &rays);
+        }
+        for (name, p) in [
+            ("kdtree-default", KdTreeParams::default()),
+            ("kdtree-pbrt", KdTreeParams::pbrt()),
+            ("kdtree-fast_build", KdTreeParams::fast_build()),
+            ("kdtree-best_traversal", KdTreeParams::best_traversal()),
+            ("kdtree-env", env_params(mesh.triangle_count())),
+        ] {
+            costs(name, &KdTree::with_params(&mesh, &p).unwrap(), &rays);
+        }
+    }
+}

@@ -1,0 +1,384 @@
+//! The O(n log n) build: root events, the recursion (parallel at the top),
+//! and the flattening of the pieces into one depth-first node array.
+
+pub(crate) mod events;
+pub(crate) mod sah;
+pub(crate) mod split;
+
+use crate::node::KdNode;
+use crate::params::KdTreeParams;
+use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
+use events::{Events, push_axis_events, sort_events};
+use sah::{Sah, Split, best_split};
+use split::{NodeWork, split_node};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Whether split positions fit the node's 32-bit payload (`f32` trees);
+/// `f64` trees keep them in a side table.
+#[inline]
+pub(crate) fn inline_splits<T: Real>() -> bool {
+    size_of::<T>() == 4
+}
+
+/// The payload word of a split at `pos`, appending to `table` if needed.
+pub(crate) fn encode_split<T: Real>(pos: T, table: &mut Vec<T>) -> u32 {
+    if inline_splits::<T>() {
+        pos.to_bits_u64() as u32
+    } else {
+        table.push(pos);
+        (table.len() - 1) as u32
+    }
+}
+
+/// The split position stored in `word`.
+#[inline]
+pub(crate) fn decode_split<T: Real>(word: u32, table: &[T]) -> T {
+    if inline_splits::<T>() {
+        // Exact: the word holds an f32's bits and T is f32.
+        T::from_f64(f64::from(f32::from_bits(word)))
+    } else {
+        table[word as usize]
+    }
+}
+
+/// Nodes, references and split table of a tree or of a piece of one, with
+/// child indices and leaf offsets relative to its own arrays.
+#[derive(Debug)]
+pub(crate) struct Out<T> {
+    pub(crate) nodes: Vec<KdNode>,
+    pub(crate) refs: Vec<u32>,
+    pub(crate) splits: Vec<T>,
+}
+
+impl<T: Real> Out<T> {
+    pub(crate) fn new() -> Self {
+        Self {
+            nodes: Vec::new(),
+            refs: Vec::new(),
+            splits: Vec::new(),
+        }
+    }
+
+    /// Appends a leaf of `prims` (ascending).
+    pub(crate) fn push_leaf(&mut self, prims: &[u32]) {
+        let node = match prims {
+            [] => KdNode::leaf(0, 0),
+            [p] => KdNode::leaf(1, *p),
+            _ => {
+                let at = self.refs.len() as u32;
+                self.refs.extend_from_slice(prims);
+                KdNode::leaf(prims.len() as u32, at)
+            }
+        };
+        self.nodes.push(node);
+    }
+
+    /// Appends an inner node whose above child is not known yet; returns its index.
+    pub(crate) fn push_inner(&mut self, axis: usize, pos: T) -> usize {
+        let word = encode_split(pos, &mut self.splits);
+        self.nodes.push(KdNode::inner(axis, word, 0));
+        self.nodes.len() - 1
+    }
+
+    /// Sets the above child of inner node `at` to the next node appended.
+    pub(crate) fn link_above(&mut self, at: usize) {
+        let n = self.nodes[at];
+        let above = self.nodes.len().min(KdNode::MAX_COUNT as usize) as u32;
+        self.nodes[at] = KdNode::inner(n.axis(), n.split_word(), above);
+    }
+}
+
+/// A built subtree: flat arrays, or an inner node over two pieces built in
+/// parallel (joined once, at the end, so nothing is copied per level).
+enum Piece<T> {
+    Flat(Out<T>),
+    Inner {
+        axis: usize,
+        pos: T,
+        below: Box<Piece<T>>,
+        above: Box<Piece<T>>,
+    },
+}
+
+/// Shared by every task of one build.
+pub(crate) struct Ctx<'p, T, P: ?Sized> {
+    pub(crate) prims: &'p P,
+    pub(crate) params: &'p KdTreeParams,
+    pub(crate) depth_limit: u32,
+    refs: AtomicU64,
+    failed: AtomicBool,
+    _t: core::marker::PhantomData<T>,
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
+    /// True when a node of `n` primitives at `depth` is a leaf without a search.
+    pub(crate) fn leaf_without_search(&self, n: usize, depth: u32) -> bool {
+        n == 0
+            || n <= self.params.leaf_size as usize
+            || depth >= self.depth_limit
+            || self.failed.load(Ordering::Relaxed)
+    }
+
+    /// Counts a leaf's references against the budget.
+    fn count_leaf(&self, n: usize) {
+        let total = self.refs.fetch_add(n as u64, Ordering::Relaxed) + n as u64;
+        if total > self.params.max_references.min(u64::from(u32::MAX)) {
+            self.failed.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The split a node should take, or `None` for a leaf (SAH termination).
+fn choose<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    ctx: &Ctx<'_, T, P>,
+    node: &NodeWork<T>,
+) -> Option<Split<T>> {
+    let n = node.prims.len();
+    if ctx.leaf_without_search(n, node.depth) {
+        return None;
+    }
+    let sah = Sah::new(ctx.params, &node.bounds)?;
+    let best = best_split(&sah, &node.events, n)?;
+    (best.cost < sah.leaf_cost(n)).then_some(best)
+}
+
+/// Builds a subtree serially into `out`.
+fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    ctx: &Ctx<'_, T, P>,
+    node: NodeWork<T>,
+    out: &mut Out<T>,
+) {
+    match choose(ctx, &node) {
+        None => {
+            ctx.count_leaf(node.prims.len());
+            out.push_leaf(&node.prims);
+        }
+        Some(s) => {
+            let at = out.push_inner(s.axis, s.pos);
+            let (below, above) = split_node(node, &s, ctx.prims);
+            build_serial(ctx, below, out);
+            out.link_above(at);
+            build_serial(ctx, above, out);
+        }
+    }
+}
+
+/// Builds a subtree, in parallel while it is large.
+fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    ctx: &Ctx<'_, T, P>,
+    node: NodeWork<T>,
+) -> Piece<T> {
+    if node.prims.len() < ctx.params.parallel_threshold.max(2) {
+        let mut out = Out::new();
+        build_serial(ctx, node, &mut out);
+        return Piece::Flat(out);
+    }
+    match choose(ctx, &node) {
+        None => {
+            let mut out = Out::new();
+            ctx.count_leaf(node.prims.len());
+            out.push_leaf(&node.prims);
+            Piece::Flat(out)
+        }
+        Some(s) => {
+            let (below, above) = split_node(node, &s, ctx.prims);
+            let (below, above) =
+                rayon::join(|| build_piece(ctx, below), || build_piece(ctx, above));
+            Piece::Inner {
+                axis: s.axis,
+                pos: s.pos,
+                below: Box::new(below),
+                above: Box::new(above),
+            }
+        }
+    }
+}
+
+/// Appends a piece to `out`, relocating its indices.
+fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError> {
+    match piece {
+        Piece::Flat(o) => {
+            let total = out.nodes.len() + o.nodes.len();
+            if total > KdNode::MAX_COUNT as usize
+                || out.refs.len() + o.refs.len() > u32::MAX as usize
+            {
+                return Err(BuildError::BudgetExceeded {
+                    what: "kd-tree nodes (30-bit indices)",
+                    needed: total as u64,
+                    budget: u64::from(KdNode::MAX_COUNT),
+                });
+            }
+            let (nb, rb) = (out.nodes.len() as u32, out.refs.len() as u32);
+            let sb = (!inline_splits::<T>()).then_some(out.splits.len() as u32);
+            out.nodes
+                .extend(o.nodes.iter().map(|n| n.relocated(nb, rb, sb)));
+            out.refs.extend_from_slice(&o.refs);
+            out.splits.extend_from_slice(&o.splits);
+        }
+        Piece::Inner {
+            axis,
+            pos,
+            below,
+            above,
+        } => {
+            let at = out.push_inner(axis, pos);
+            flatten(*below, out)?;
+            out.link_above(at);
+            flatten(*above, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// What a build produces before it is wrapped with its primitives.
+pub(crate) struct Built<T> {
+    pub(crate) out: Out<T>,
+    pub(crate) bounds: Aabb<T>,
+    pub(crate) depth_limit: u32,
+    pub(crate) build_time: std::time::Duration,
+}
+
+/// The primitive count a tree can index: node-local indices have 30 bits.
+fn check_count(n: usize) -> Result<(), BuildError> {
+    if n > KdNode::MAX_COUNT as usize {
+        return Err(BuildError::BudgetExceeded {
+            what: "primitives (30-bit kd-tree indices)",
+            needed: n as u64,
+            budget: u64::from(KdNode::MAX_COUNT),
+        });
+    }
+    Ok(())
+}
+
+/// Builds the tree over `prims` with the event sweep, or with the naive
+/// O(n²) reference builder when `naive` is set.
+pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+    params: &KdTreeParams,
+    naive: bool,
+) -> Result<Built<T>, BuildError> {
+    let start = Instant::now();
+    params.validate()?;
+    let (boxes, bounds) = primitive_bounds(prims)?;
+    let n = prims.len();
+    check_count(n)?;
+    let depth_limit = params.depth_limit(n);
+    let ctx = Ctx {
+        prims,
+        params,
+        depth_limit,
+        refs: AtomicU64::new(0),
+        failed: AtomicBool::new(false),
+        _t: core::marker::PhantomData,
+    };
+    let mut out = Out::new();
+    if naive {
+        crate::naive::build_naive(&ctx, &boxes, bounds, &mut out);
+    } else {
+        let events = root_events(&boxes);
+        let root = NodeWork {
+            bounds,
+            prims: (0..n as u32).collect(),
+            events,
+            depth: 0,
+        };
+        drop(boxes);
+        let piece = build_piece(&ctx, root);
+        flatten(piece, &mut out)?;
+    }
+    if ctx.failed.load(Ordering::Relaxed) {
+        return Err(BuildError::BudgetExceeded {
+            what: "kd-tree references",
+            needed: ctx.refs.load(Ordering::Relaxed),
+            budget: params.max_references.min(u64::from(u32::MAX)),
+        });
+    }
+    out.nodes.shrink_to_fit();
+    out.refs.shrink_to_fit();
+    out.splits.shrink_to_fit();
+    Ok(Built {
+        out,
+        bounds,
+        depth_limit,
+        build_time: start.elapsed(),
+    })
+}
+
+/// The root's events: each primitive's bounds (its part in the root box),
+/// sorted once per axis, the three axes in parallel.
+fn root_events<T: Real>(boxes: &[Aabb<T>]) -> Events<T> {
+    let make = |a: usize| {
+        let mut list = Vec::with_capacity(2 * boxes.len());
+        for (i, b) in boxes.iter().enumerate() {
+            push_axis_events(&mut list, a, i as u32, b);
+        }
+        sort_events(&mut list);
+        list
+    };
+    let (x, (y, z)) = rayon::join(|| make(0), || rayon::join(|| make(1), || make(2)));
+    [x, y, z]
+}
+
+/// Shape statistics of a finished tree, by one walk with node boxes.
+pub(crate) fn tree_stats<T: Real>(
+    out: &Out<T>,
+    bounds: &Aabb<T>,
+    params: &KdTreeParams,
+    depth_limit: u32,
+    primitives: usize,
+) -> AccelStats {
+    let mut stats = AccelStats {
+        kind: "kdtree",
+        primitives,
+        nodes: out.nodes.len(),
+        bytes: out.nodes.capacity() * size_of::<KdNode>()
+            + out.refs.capacity() * size_of::<u32>()
+            + out.splits.capacity() * size_of::<T>(),
+        ..AccelStats::default()
+    };
+    let root_area = bounds.half_area().to_f64();
+    let area_ratio = |b: &Aabb<T>| {
+        if root_area > 0.0 && root_area.is_finite() {
+            b.half_area().to_f64() / root_area
+        } else {
+            1.0
+        }
+    };
+    let (mut max_depth, mut depth_sum, mut sah_cost) = (0u32, 0u64, 0.0f64);
+    let mut stack = vec![(0usize, *bounds, 0u32)];
+    while let Some((i, b, depth)) = stack.pop() {
+        let node = out.nodes[i];
+        if node.is_leaf() {
+            let count = node.prim_count() as usize;
+            stats.leaves += 1;
+            stats.empty_leaves += usize::from(count == 0);
+            stats.references += count;
+            stats.max_leaf_references = stats.max_leaf_references.max(count);
+            max_depth = max_depth.max(depth);
+            depth_sum += u64::from(depth);
+            sah_cost += params.intersect_cost * count as f64 * area_ratio(&b);
+        } else {
+            sah_cost += params.traversal_cost * area_ratio(&b);
+            let (axis, s) = (node.axis(), decode_split(node.split_word(), &out.splits));
+            let (mut lo, mut hi) = (b, b);
+            lo.max[axis] = s;
+            hi.min[axis] = s;
+            stack.push((i + 1, lo, depth + 1));
+            stack.push((node.above_child() as usize, hi, depth + 1));
+        }
+    }
+    stats.extra = vec![
+        ("depth", f64::from(max_depth)),
+        (
+            "mean_leaf_depth",
+            depth_sum as f64 / stats.leaves.max(1) as f64,
+        ),
+        ("depth_limit", f64::from(depth_limit)),
+        ("sah_cost", sah_cost),
+        ("intersect_cost", params.intersect_cost),
+        ("traversal_cost", params.traversal_cost),
+        ("empty_bonus", params.empty_bonus),
+    ];
+    stats
+}

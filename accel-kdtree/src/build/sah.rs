@@ -1,0 +1,263 @@
+//! The surface area heuristic and the O(n) sweep over sorted events.
+//!
+//! For a plane `p` on axis `k`, with `N` primitives in the node, the sweep
+//! keeps (Wald & Havran 2006, §4.2): `N_L` = primitives with clipped bounds
+//! starting before `p` (`min < p`), `N_R` = those ending after it
+//! (`max > p`), and `N_P` = those flat in `p` (`min = max = p`). A primitive
+//! that only touches `p` from one side counts on that side only. Planar
+//! primitives go to whichever side is cheaper (ties go left): the explicit
+//! handling of primitives lying in the split plane.
+//!
+//! Only planes strictly inside the node are candidates (as pbrt): a plane on
+//! the node's face would cut off a flat empty child, which the empty bonus
+//! would reward forever.
+
+use super::events::{Event, Events};
+use crate::KdTreeParams;
+use accel_core::{Aabb, Real};
+
+/// A chosen split: axis, plane, the side of the planar primitives, and its cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Split<T> {
+    pub(crate) axis: usize,
+    pub(crate) pos: T,
+    pub(crate) planar_left: bool,
+    pub(crate) cost: f64,
+}
+
+/// The SAH of one node, in `f64` whatever `T` is.
+#[derive(Clone, Debug)]
+pub(crate) struct Sah {
+    traversal: f64,
+    intersect: f64,
+    /// `1 − empty_bonus`.
+    keep: f64,
+    min: [f64; 3],
+    max: [f64; 3],
+    /// Per split axis `k`: the product and the sum of the two other extents.
+    cross: [f64; 3],
+    sum: [f64; 3],
+    inv_half_area: f64,
+}
+
+impl Sah {
+    /// The SAH of a node with bounds `b`; `None` when the node has no area
+    /// (flat in two axes), where no split can be priced.
+    pub(crate) fn new<T: Real>(params: &KdTreeParams, b: &Aabb<T>) -> Option<Self> {
+        let min = [0, 1, 2].map(|a| b.min[a].to_f64());
+        let max = [0, 1, 2].map(|a| b.max[a].to_f64());
+        let d = [0, 1, 2].map(|a| max[a] - min[a]);
+        let half_area = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+        if !(half_area > 0.0 && half_area.is_finite()) {
+            return None;
+        }
+        let cross = [0, 1, 2].map(|k| d[(k + 1) % 3] * d[(k + 2) % 3]);
+        let sum = [0, 1, 2].map(|k| d[(k + 1) % 3] + d[(k + 2) % 3]);
+        Some(Self {
+            traversal: params.traversal_cost,
+            intersect: params.intersect_cost,
+            keep: 1.0 - params.empty_bonus,
+            min,
+            max,
+            cross,
+            sum,
+            inv_half_area: 1.0 / half_area,
+        })
+    }
+
+    /// The cost of a leaf of `n` primitives.
+    #[inline]
+    pub(crate) fn leaf_cost(&self, n: usize) -> f64 {
+        self.intersect * n as f64
+    }
+
+    /// Whether `pos` may split axis `k` (strictly inside the node).
+    #[inline]
+    pub(crate) fn is_candidate(&self, k: usize, pos: f64) -> bool {
+        self.min[k] < pos && pos < self.max[k]
+    }
+
+    /// The SAH cost of splitting axis `k` at `pos` with `nl` and `nr`
+    /// primitives on the two sides.
+    #[inline]
+    pub(crate) fn cost(&self, k: usize, pos: f64, nl: usize, nr: usize) -> f64 {
+        let left = self.cross[k] + self.sum[k] * (pos - self.min[k]);
+        let right = self.cross[k] + self.sum[k] * (self.max[k] - pos);
+        let weight = if nl == 0 || nr == 0 { self.keep } else { 1.0 };
+        self.traversal
+            + self.intersect * weight * (left * nl as f64 + right * nr as f64) * self.inv_half_area
+    }
+
+    /// The cost of a candidate plane with `nl`, `np`, `nr` primitives left,
+    /// in and right of it, and whether the planar ones go left.
+    #[inline]
+    pub(crate) fn evaluate(
+        &self,
+        k: usize,
+        pos: f64,
+        nl: usize,
+        np: usize,
+        nr: usize,
+    ) -> (f64, bool) {
+        if np == 0 {
+            return (self.cost(k, pos, nl, nr), true);
+        }
+        let to_left = self.cost(k, pos, nl + np, nr);
+        let to_right = self.cost(k, pos, nl, np + nr);
+        if to_left <= to_right {
+            (to_left, true)
+        } else {
+            (to_right, false)
+        }
+    }
+}
+
+/// Keeps the first of the cheapest splits, in the order axis, then position:
+/// `candidate` replaces `best` only when strictly cheaper.
+#[inline]
+pub(crate) fn keep_cheaper<T>(best: &mut Option<Split<T>>, candidate: Split<T>) {
+    if best.as_ref().is_none_or(|b| candidate.cost < b.cost) {
+        *best = Some(candidate);
+    }
+}
+
+/// The cheapest plane on axis `k` among the node's `n` primitives, by one
+/// sweep over its sorted events.
+pub(crate) fn sweep_axis<T: Real>(
+    sah: &Sah,
+    k: usize,
+    events: &[Event<T>],
+    n: usize,
+) -> Option<Split<T>> {
+    // The best so far as plain scalars (first strictly cheapest wins, as
+    // `keep_cheaper`: every cost here is finite, so starting from +∞ is the
+    // same as starting from none).
+    let (mut best_cost, mut best_at, mut best_left) = (f64::INFINITY, usize::MAX, true);
+    let (lo, hi) = (sah.min[k], sah.max[k]);
+    let (mut nl, mut nr) = (0usize, n);
+    let mut i = 0;
+    while let Some(first) = events.get(i) {
+        let pos = first.pos;
+        let at = i;
+        // Count this plane's ends, planars and starts (they come in that order).
+        let mut counts = [0usize; 3];
+        for e in &events[i..] {
+            if e.pos != pos {
+                break;
+            }
+            counts[e.kind() as usize] += 1;
+            i += 1;
+        }
+        let [ends, planar, starts] = counts;
+        nr -= planar + ends;
+        let p = pos.to_f64();
+        if lo < p && p < hi {
+            let (cost, planar_left) = sah.evaluate(k, p, nl, planar, nr);
+            if cost < best_cost {
+                (best_cost, best_at, best_left) = (cost, at, planar_left);
+            }
+        }
+        nl += starts + planar;
+    }
+    events.get(best_at).map(|e| Split {
+        axis: k,
+        pos: e.pos,
+        planar_left: best_left,
+        cost: best_cost,
+    })
+}
+
+/// Nodes with at least this many events per axis sweep their axes in parallel.
+const PARALLEL_SWEEP: usize = 1 << 14;
+
+/// The cheapest plane over all three axes (ties to the lower axis).
+pub(crate) fn best_split<T: Real>(sah: &Sah, events: &Events<T>, n: usize) -> Option<Split<T>> {
+    let per_axis: [Option<Split<T>>; 3] = if events[0].len() >= PARALLEL_SWEEP {
+        let (x, (y, z)) = rayon::join(
+            || sweep_axis(sah, 0, &events[0], n),
+            || {
+                rayon::join(
+                    || sweep_axis(sah, 1, &events[1], n),
+                    || sweep_axis(sah, 2, &events[2], n),
+                )
+            },
+        );
+        [x, y, z]
+    } else {
+        [0, 1, 2].map(|k| sweep_axis(sah, k, &events[k], n))
+    };
+    let mut best = None;
+    for s in per_axis.into_iter().flatten() {
+        keep_cheaper(&mut best, s);
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use accel_core::Vec3;
+
+    fn box123() -> Aabb<f64> {
+        Aabb::new(Vec3::new(1.0, -2.0, 0.5), Vec3::new(2.0, 0.0, 3.5))
+    }
+
+    #[test]
+    fn cost_on_a_1_by_2_by_3_box() {
+        // pbrt's costs: intersection 5, traversal 1, empty bonus 0.5.
+        let p = KdTreeParams::pbrt();
+        let sah = Sah::new(&p, &box123()).unwrap();
+        // Split z at 1.5 (1 of the 3 units below): left half-area 1·2 + 3·1 = 5,
+        // right 1·2 + 3·2 = 8, of 11.
+        let c = sah.cost(2, 1.5, 4, 6);
+        assert!(
+            (c - (1.0 + 5.0 * (5.0 * 4.0 + 8.0 * 6.0) / 11.0)).abs() < 1e-12,
+            "{c}"
+        );
+        // An empty side earns the bonus.
+        let c = sah.cost(0, 1.25, 0, 6);
+        let right = 2.0 * 3.0 + 5.0 * 0.75;
+        assert!(
+            (c - (1.0 + 5.0 * 0.5 * right * 6.0 / 11.0)).abs() < 1e-12,
+            "{c}"
+        );
+        assert_eq!(sah.leaf_cost(3), 15.0);
+        assert!(
+            sah.is_candidate(1, -1.0) && !sah.is_candidate(1, 0.0) && !sah.is_candidate(1, -2.0)
+        );
+    }
+
+    #[test]
+    fn boxes_without_area_cannot_be_priced() {
+        let line = Aabb::new(Vec3::new(0.0f32, 0.0, 0.0), Vec3::new(5.0, 0.0, 0.0));
+        assert!(Sah::new(&KdTreeParams::default(), &line).is_none());
+        let flat = Aabb::new(Vec3::new(0.0f32, 0.0, 0.0), Vec3::new(5.0, 1.0, 0.0));
+        assert!(Sah::new(&KdTreeParams::default(), &flat).is_some());
+    }
+
+    #[test]
+    fn sweep_counts_touching_and_planar_primitives_on_their_sides() {
+        use super::super::events::{push_events, sort_events};
+        // Node [0, 4] on x. Prim 0: [0, 1]; prim 1: flat at 1; prim 2: [1, 3].
+        let node = Aabb::new(Vec3::new(0.0f64, 0.0, 0.0), Vec3::new(4.0, 1.0, 1.0));
+        let spans = [(0.0, 1.0), (1.0, 1.0), (1.0, 3.0)];
+        let mut ev: Events<f64> = Default::default();
+        for (i, &(lo, hi)) in spans.iter().enumerate() {
+            let b = Aabb::new(Vec3::new(lo, 0.0, 0.0), Vec3::new(hi, 1.0, 1.0));
+            push_events(&mut ev, i as u32, &b);
+        }
+        sort_events(&mut ev[0]);
+        let sah = Sah::new(&KdTreeParams::default(), &node).unwrap();
+        // At x = 1: N_L = 1 (prim 0 touches from the left), N_P = 1, N_R = 1.
+        let (want, left) = sah.evaluate(0, 1.0, 1, 1, 1);
+        // At x = 3: N_L = 3, N_R = 0.
+        let at3 = sah.cost(0, 3.0, 3, 0);
+        let best = sweep_axis(&sah, 0, &ev[0], 3).unwrap();
+        let expect = if want < at3 {
+            (1.0, want, left)
+        } else {
+            (3.0, at3, true)
+        };
+        assert_eq!((best.pos, best.cost, best.planar_left), expect);
+    }
+}

@@ -1,0 +1,166 @@
+//! Splitting a node: classify, partition the sorted lists, re-clip the
+//! straddlers (Wald & Havran 2006, §4.3).
+//!
+//! Against the chosen plane `p` on axis `k`, the events of axis `k` classify
+//! each primitive: an end at or before `p` puts it left only, a start at or
+//! after `p` right only, a planar event at `p` on the side the SAH chose, and
+//! everything else straddles. The three sorted lists are then split by one
+//! stable pass each (so both halves stay sorted), with each event's
+//! primitive renumbered in its child. A straddling primitive is clipped anew
+//! to each child's box (perfect splits), and its few new events are sorted
+//! and merged into the child's lists. Nothing is re-sorted: the split is
+//! linear in the node's events plus `s log s` for `s` straddlers.
+
+use super::events::{END, Events, PLANAR, push_events, sort_events};
+use super::sah::Split;
+use accel_core::{Aabb, PrimitiveSet, Real};
+
+/// A node under construction: its box, its primitives (global indices,
+/// ascending) and their events, indexed by position in `prims`.
+#[derive(Debug)]
+pub(crate) struct NodeWork<T> {
+    pub(crate) bounds: Aabb<T>,
+    pub(crate) prims: Vec<u32>,
+    pub(crate) events: Events<T>,
+    pub(crate) depth: u32,
+}
+
+const LEFT: u32 = 1;
+const RIGHT: u32 = 2;
+const BOTH: u32 = 3;
+/// Where the side sits in a primitive's destination word.
+const SIDE_SHIFT: u32 = 30;
+/// The child index below it.
+const INDEX_MASK: u32 = (1 << SIDE_SHIFT) - 1;
+
+/// Splits `node` at `split` into its two children.
+pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    node: NodeWork<T>,
+    split: &Split<T>,
+    prims: &P,
+) -> (NodeWork<T>, NodeWork<T>) {
+    let NodeWork {
+        bounds,
+        prims: list,
+        events,
+        depth,
+    } = node;
+    let (k, p) = (split.axis, split.pos);
+    let n = list.len();
+
+    // One word per primitive: its side in the top two bits, its index in its
+    // child below (one random access per event in the partition).
+    let mut dest = vec![BOTH << SIDE_SHIFT; n];
+    for e in &events[k] {
+        let d = &mut dest[e.local()];
+        match e.kind() {
+            END => {
+                if e.pos <= p {
+                    *d = LEFT << SIDE_SHIFT;
+                }
+            }
+            PLANAR => {
+                *d = if e.pos < p || (e.pos == p && split.planar_left) {
+                    LEFT << SIDE_SHIFT
+                } else {
+                    RIGHT << SIDE_SHIFT
+                };
+            }
+            _ => {
+                if e.pos >= p {
+                    *d = RIGHT << SIDE_SHIFT;
+                }
+            }
+        }
+    }
+
+    let mut left_box = bounds;
+    left_box.max[k] = p;
+    let mut right_box = bounds;
+    right_box.min[k] = p;
+
+    // Renumber; clip the straddlers to each child (perfect splits).
+    let mut left_prims = Vec::with_capacity(n);
+    let mut right_prims = Vec::with_capacity(n);
+    let mut left_new: Events<T> = Default::default();
+    let mut right_new: Events<T> = Default::default();
+    for (d, &g) in dest.iter_mut().zip(&list) {
+        match *d >> SIDE_SHIFT {
+            LEFT => {
+                *d |= left_prims.len() as u32;
+                left_prims.push(g);
+            }
+            RIGHT => {
+                *d |= right_prims.len() as u32;
+                right_prims.push(g);
+            }
+            _ => {
+                for (child_box, child_prims, new) in [
+                    (&left_box, &mut left_prims, &mut left_new),
+                    (&right_box, &mut right_prims, &mut right_new),
+                ] {
+                    // Intersected again: a user's clipper cannot leak a box
+                    // outside the node into the events.
+                    let c = prims
+                        .clipped_bounds(g as usize, child_box)
+                        .intersection(child_box);
+                    if !c.is_empty() {
+                        push_events(new, child_prims.len() as u32, &c);
+                        child_prims.push(g);
+                    }
+                }
+            }
+        }
+    }
+    drop(list);
+
+    let n_left = left_prims.len();
+    let n_right = right_prims.len();
+    let mut left_events: Events<T> = Default::default();
+    let mut right_events: Events<T> = Default::default();
+    for (a, list) in events.into_iter().enumerate() {
+        let mut lefts = list;
+        let estimate = lefts.len() * n_right / n.max(1) + right_new[a].len() + 8;
+        let mut rights = Vec::with_capacity(estimate);
+        let mut w = 0;
+        for r in 0..lefts.len() {
+            let e = lefts[r];
+            let d = dest[e.local()];
+            let moved = e.with_local(d & INDEX_MASK);
+            match d >> SIDE_SHIFT {
+                LEFT => {
+                    lefts[w] = moved;
+                    w += 1;
+                }
+                RIGHT => rights.push(moved),
+                _ => {}
+            }
+        }
+        lefts.truncate(w);
+        for (dst, new) in [
+            (&mut lefts, &mut left_new[a]),
+            (&mut rights, &mut right_new[a]),
+        ] {
+            sort_events(new);
+            super::events::merge_into(dst, new);
+        }
+        left_events[a] = lefts;
+        right_events[a] = rights;
+    }
+    debug_assert!(left_events.iter().all(|l| l.len() >= n_left));
+    debug_assert!(right_events.iter().all(|l| l.len() >= n_right));
+    (
+        NodeWork {
+            bounds: left_box,
+            prims: left_prims,
+            events: left_events,
+            depth: depth + 1,
+        },
+        NodeWork {
+            bounds: right_box,
+            prims: right_prims,
+            events: right_events,
+            depth: depth + 1,
+        },
+    )
+}

@@ -1,0 +1,296 @@
+//! Queries: front-to-back traversal of a thin beam with a small stack.
+//!
+//! The ray is the beam of [`TraversalRay`]: its interval is clipped to the
+//! tree's bounds (widened by rounding), and at each inner node
+//! [`TraversalRay::plane_band`] (computed with the reciprocal direction, see
+//! [`band`]) gives the parameters at which the beam touches the split plane. The near child is visited up to the band's end and the
+//! far child from its start, so a ray running along a split plane, or
+//! crossing it where rounding could put it on either side, visits both: no
+//! hit is lost at a plane, and primitives lying in a split plane (stored on
+//! one side only) are found from both. A component of `±0` visits only the
+//! side holding the origin, or both when the origin is within the beam of the
+//! plane. A node is skipped once the best hit, plus the hit tolerance
+//! `t_tol`, lies before the node's entry; a per-query [`Mailbox`] tests each
+//! primitive once.
+
+use crate::build::decode_split;
+use crate::tree::KdTree;
+use accel_core::{
+    Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
+    TraversalCounters, TraversalRay, nearer, validate_region,
+};
+
+/// Traversal stack entries: at most one per level.
+const STACK: usize = crate::KdTreeParams::MAX_DEPTH as usize;
+
+/// What a walk does at leaves, and how far it still needs to go.
+trait Visitor<T> {
+    /// Nodes entered after this parameter are skipped.
+    fn cutoff(&self) -> T;
+    /// Tests a leaf's primitives; `true` ends the walk.
+    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool;
+}
+
+/// The nearest hit.
+struct Nearest<'q, T: Real, P: ?Sized> {
+    prims: &'q P,
+    tr: &'q TraversalRay<T>,
+    mailbox: Mailbox,
+    best: Option<Hit<T>>,
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
+    #[inline]
+    fn cutoff(&self) -> T {
+        self.best.map_or(T::INFINITY, |b| b.t + self.tr.t_tol)
+    }
+
+    #[inline]
+    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool {
+        for &p in prims {
+            if self.mailbox.seen(p) {
+                continue;
+            }
+            counter.prim();
+            let t_max = self.best.map_or(self.tr.ray().t_max, |b| b.t);
+            if let Some(h) = self.prims.intersect(p as usize, &self.tr.prepared, t_max) {
+                self.best = nearer(self.best, Hit::new(p, h));
+            }
+        }
+        false
+    }
+}
+
+/// Any hit.
+struct AnyHit<'q, T: Real, P: ?Sized> {
+    prims: &'q P,
+    tr: &'q TraversalRay<T>,
+    mailbox: Mailbox,
+    found: bool,
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
+    #[inline]
+    fn cutoff(&self) -> T {
+        T::INFINITY
+    }
+
+    #[inline]
+    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool {
+        let t_max = self.tr.ray().t_max;
+        for &p in prims {
+            if self.mailbox.seen(p) {
+                continue;
+            }
+            counter.prim();
+            if self
+                .prims
+                .intersect(p as usize, &self.tr.prepared, t_max)
+                .is_some()
+            {
+                self.found = true;
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// [`TraversalRay::plane_band`] by the reciprocal direction instead of two
+/// divisions: the parameters at which the beam touches the plane
+/// `x[axis] = s`. Each end takes four roundings (the two differences, the
+/// reciprocal and the product) against plane_band's three, so it is widened
+/// by `gamma(6)` instead of `gamma(4)`: never narrower than plane_band's band.
+/// Components whose reciprocal is not finite (zero or subnormal) take
+/// plane_band itself.
+///
+/// For a beam parallel to the plane and clear of it, plane_band's empty band
+/// becomes `(+∞, +∞)`: the near child (the origin's side) for the whole
+/// interval, the far child never; within the beam it is `(−∞, +∞)`, both.
+#[inline(always)]
+fn band<T: Real>(tr: &TraversalRay<T>, inv: T, axis: usize, s: T, o: T) -> (T, T) {
+    if !inv.is_finite() {
+        let (lo, hi) = tr.plane_band(axis, s);
+        return if lo > hi {
+            (T::INFINITY, T::INFINITY)
+        } else {
+            (lo, hi)
+        };
+    }
+    let a = ((s - o) - tr.delta) * inv;
+    let b = ((s - o) + tr.delta) * inv;
+    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+    let g = T::gamma(6);
+    (lo - lo.abs() * g, hi + hi.abs() * g)
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
+    /// Walks the leaves the beam touches, front to back.
+    #[inline]
+    fn walk<V: Visitor<T>, C: CostCounter>(
+        &self,
+        tr: &TraversalRay<T>,
+        v: &mut V,
+        counter: &mut C,
+    ) {
+        let ray = tr.ray();
+        let (o, d) = (ray.origin, ray.direction);
+        let inv = tr.prepared.inv_dir;
+        let mut stack = [(0u32, T::ZERO, T::ZERO); STACK];
+        let mut sp = 0;
+        let (mut idx, mut t0, mut t1) = (0usize, tr.t_start, tr.t_end);
+        loop {
+            if t0 <= v.cutoff() {
+                let node = &self.nodes[idx];
+                counter.node();
+                if !node.is_leaf() {
+                    let axis = node.axis();
+                    let s = decode_split(node.split_word(), &self.splits);
+                    let (da, oa) = (d[axis], o[axis]);
+                    let (lo, hi) = band(tr, inv[axis], axis, s, oa);
+                    // Below first when going up, or parallel on the low side
+                    // (bitwise, not short-circuit: no branch to mispredict).
+                    let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));
+                    let (below, above) = (idx + 1, node.above_child() as usize);
+                    let (near, far) = if below_first {
+                        (below, above)
+                    } else {
+                        (above, below)
+                    };
+                    let near_t1 = t1.min(hi);
+                    let far_t0 = t0.max(lo);
+                    // The far child waits on the stack when the beam reaches
+                    // it (written always, kept only then: sp < STACK here,
+                    // since an inner node lies above the depth limit).
+                    stack[sp] = (far as u32, far_t0, t1);
+                    sp += usize::from(far_t0 <= t1);
+                    if t0 <= near_t1 {
+                        idx = near;
+                        t1 = near_t1;
+                        continue;
+                    }
+                } else if v.leaf(self.leaf_primitives(node), counter) {
+                    return;
+                }
+            }
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            let (i, a, b) = stack[sp];
+            (idx, t0, t1) = (i as usize, a, b);
+        }
+    }
+
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        ray.validate()?;
+        let Some(tr) = TraversalRay::new(ray, &self.bounds) else {
+            return Ok(None);
+        };
+        let mut v = Nearest {
+            prims: self.prims,
+            tr: &tr,
+            mailbox: Mailbox::new(),
+            best: None,
+        };
+        self.walk(&tr, &mut v, counter);
+        Ok(v.best)
+    }
+
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+        ray.validate()?;
+        let Some(tr) = TraversalRay::new(ray, &self.bounds) else {
+            return Ok(false);
+        };
+        let mut v = AnyHit {
+            prims: self.prims,
+            tr: &tr,
+            mailbox: Mailbox::new(),
+            found: false,
+        };
+        self.walk(&tr, &mut v, counter);
+        Ok(v.found)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
+    fn bounds(&self) -> Aabb<T> {
+        self.bounds
+    }
+
+    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, &mut ())
+    }
+
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
+        self.any(ray, &mut ())
+    }
+
+    fn intersect_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, counters)
+    }
+
+    fn occluded_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<bool, QueryError> {
+        self.any(ray, counters)
+    }
+
+    /// Gathers the references of every leaf near the region, then keeps
+    /// those the primitive's own overlap test accepts.
+    ///
+    /// "Near" is the region grown by `gamma(1024)` of the largest coordinate
+    /// in play: leaves hold every point of their primitives, and an exact
+    /// overlap test (the triangle–box test) may accept a box up to its own
+    /// rounding allowance away from the primitive, far less than that.
+    fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
+        validate_region(region)?;
+        if region.is_empty() || self.bounds.is_empty() {
+            return Ok(Vec::new());
+        }
+        let scale = region
+            .max_abs_coordinate()
+            .max(self.bounds.max_abs_coordinate());
+        let margin = T::gamma(1024) * scale;
+        let grown = Aabb {
+            min: region.min.map(|x| (x - margin).next_down()),
+            max: region.max.map(|x| (x + margin).next_up()),
+        };
+        let mut found: Vec<u32> = Vec::new();
+        if grown.overlaps(&self.bounds) {
+            let mut stack = vec![0usize];
+            while let Some(i) = stack.pop() {
+                let node = &self.nodes[i];
+                if node.is_leaf() {
+                    found.extend_from_slice(self.leaf_primitives(node));
+                    continue;
+                }
+                let (axis, s) = (node.axis(), decode_split(node.split_word(), &self.splits));
+                if grown.min[axis] <= s {
+                    stack.push(i + 1);
+                }
+                if grown.max[axis] >= s {
+                    stack.push(node.above_child() as usize);
+                }
+            }
+        }
+        found.sort_unstable();
+        found.dedup();
+        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
+        Ok(found)
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}

@@ -1,0 +1,134 @@
+//! The kD-tree: its parts and constructors.
+
+use crate::build::{Out, build, decode_split, tree_stats};
+use crate::node::KdNode;
+use crate::params::KdTreeParams;
+use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
+
+/// A SAH kD-tree over a primitive set (see the crate docs).
+///
+/// It borrows the primitives and stores only `u32` indices into them: 8-byte
+/// nodes in depth-first order, one flat reference array for the leaves, and
+/// (for `f64` trees) a table of split positions.
+#[derive(Debug)]
+pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
+    pub(crate) prims: &'a P,
+    pub(crate) nodes: Vec<KdNode>,
+    pub(crate) refs: Vec<u32>,
+    pub(crate) splits: Vec<T>,
+    pub(crate) bounds: Aabb<T>,
+    pub(crate) depth_limit: u32,
+    pub(crate) stats: AccelStats,
+}
+
+impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
+    /// Builds a tree with the default parameters ([`KdTreeParams::default`]).
+    ///
+    /// # Errors
+    /// [`BuildError`] for non-finite primitives or an exceeded budget.
+    pub fn new(prims: &'a P) -> Result<Self, BuildError> {
+        Self::with_params(prims, &KdTreeParams::default())
+    }
+
+    /// Builds a tree with the given parameters, by the O(n log n) event sweep.
+    ///
+    /// # Errors
+    /// [`BuildError::InvalidParameter`] for a parameter out of range,
+    /// [`BuildError::NonFinitePrimitive`] for a NaN or infinite primitive,
+    /// [`BuildError::BudgetExceeded`] for more than 2^30 − 1 primitives or
+    /// more references than `params.max_references`.
+    pub fn with_params(prims: &'a P, params: &KdTreeParams) -> Result<Self, BuildError> {
+        Self::assemble(prims, params, false)
+    }
+
+    /// Builds the tree with the naive O(n²) SAH builder: the same candidates,
+    /// costs and tie-breaks as [`KdTree::with_params`], so the same tree, only
+    /// slowly. For tests that check the event sweep against it.
+    ///
+    /// # Errors
+    /// As [`KdTree::with_params`].
+    #[doc(hidden)]
+    pub fn with_params_naive(prims: &'a P, params: &KdTreeParams) -> Result<Self, BuildError> {
+        Self::assemble(prims, params, true)
+    }
+
+    fn assemble(prims: &'a P, params: &KdTreeParams, naive: bool) -> Result<Self, BuildError> {
+        let built = build(prims, params, naive)?;
+        let mut stats = tree_stats(
+            &built.out,
+            &built.bounds,
+            params,
+            built.depth_limit,
+            prims.len(),
+        );
+        stats.build_time = built.build_time;
+        let Out {
+            nodes,
+            refs,
+            splits,
+        } = built.out;
+        let tree = Self {
+            prims,
+            nodes,
+            refs,
+            splits,
+            bounds: built.bounds,
+            depth_limit: built.depth_limit,
+            stats,
+        };
+        #[cfg(debug_assertions)]
+        if let Err(e) = tree.validate() {
+            panic!("kd-tree invariant broken after build: {e}");
+        }
+        Ok(tree)
+    }
+
+    /// The nodes, depth-first: node 0 is the root, an inner node's below
+    /// child follows it, its above child is at [`KdNode::above_child`].
+    #[must_use]
+    pub fn nodes(&self) -> &[KdNode] {
+        &self.nodes
+    }
+
+    /// The flat reference array that leaves of two or more primitives index.
+    #[must_use]
+    pub fn references(&self) -> &[u32] {
+        &self.refs
+    }
+
+    /// The split position of inner node `i` (`None` for a leaf).
+    ///
+    /// # Panics
+    /// If `i` is out of range.
+    #[must_use]
+    pub fn split_position(&self, i: usize) -> Option<T> {
+        let n = self.nodes[i];
+        (!n.is_leaf()).then(|| decode_split(n.split_word(), &self.splits))
+    }
+
+    /// The primitives of a leaf of this tree, ascending.
+    #[inline]
+    #[must_use]
+    pub fn leaf_primitives<'s>(&'s self, leaf: &'s KdNode) -> &'s [u32] {
+        match leaf.prim_count() {
+            0 => &[],
+            1 => core::slice::from_ref(leaf.payload_ref()),
+            c => {
+                let at = leaf.leaf_payload() as usize;
+                &self.refs[at..at + c as usize]
+            }
+        }
+    }
+
+    /// The depth limit the build used.
+    #[must_use]
+    pub fn depth_limit(&self) -> u32 {
+        self.depth_limit
+    }
+
+    /// The indexed primitives.
+    #[must_use]
+    pub fn primitives(&self) -> &'a P {
+        self.prims
+    }
+}

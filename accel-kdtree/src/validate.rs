@@ -1,0 +1,206 @@
+//! The public invariant checker.
+
+use crate::build::{decode_split, inline_splits};
+use crate::tree::KdTree;
+use accel_core::{PrimitiveSet, Real};
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
+    /// Checks the tree's invariants: every node reached exactly once from the
+    /// root in depth-first order (below child next, above child after the
+    /// below subtree), splits finite and strictly inside their node's box,
+    /// depth within the limit, leaf runs tiling the reference array in order,
+    /// each leaf's primitives strictly ascending, in range, with bounds
+    /// touching the leaf's box, and every primitive in some leaf.
+    ///
+    /// # Errors
+    /// A message naming the first broken invariant.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.prims.len();
+        if self.nodes.is_empty() {
+            return Err("no root node".into());
+        }
+        let mut referenced = vec![false; n];
+        let mut next_ref = 0usize;
+        let mut next_split = 0usize;
+        let mut visited = 0usize;
+        // Depth-first, below child first: the order the nodes are stored in.
+        let mut stack = vec![(0usize, self.bounds, 0u32)];
+        while let Some((i, b, depth)) = stack.pop() {
+            if i != visited {
+                return Err(format!(
+                    "node {i} reached out of depth-first order (expected {visited})"
+                ));
+            }
+            visited += 1;
+            if depth > self.depth_limit {
+                return Err(format!(
+                    "node {i} at depth {depth} beyond the limit {}",
+                    self.depth_limit
+                ));
+            }
+            let node = self.nodes[i];
+            if node.is_leaf() {
+                let count = node.prim_count() as usize;
+                if count >= 2 {
+                    if node.leaf_payload() as usize != next_ref {
+                        return Err(format!(
+                            "leaf {i}: run at {} but {next_ref} expected",
+                            node.leaf_payload()
+                        ));
+                    }
+                    next_ref += count;
+                    if next_ref > self.refs.len() {
+                        return Err(format!("leaf {i}: run past the reference array"));
+                    }
+                }
+                let prims = self.leaf_primitives(&node);
+                if let Some(w) = prims.windows(2).find(|w| w[0] >= w[1]) {
+                    return Err(format!(
+                        "leaf {i}: references not strictly ascending at {w:?}"
+                    ));
+                }
+                for &p in prims {
+                    let Some(seen) = referenced.get_mut(p as usize) else {
+                        return Err(format!(
+                            "leaf {i}: reference {p} out of range ({n} primitives)"
+                        ));
+                    };
+                    *seen = true;
+                    if !self.prims.bounds(p as usize).overlaps(&b) {
+                        return Err(format!(
+                            "leaf {i}: primitive {p} lies outside the leaf's box"
+                        ));
+                    }
+                }
+                continue;
+            }
+            let (axis, above) = (node.axis(), node.above_child() as usize);
+            if !inline_splits::<T>() {
+                if node.split_word() as usize != next_split || next_split >= self.splits.len() {
+                    return Err(format!(
+                        "node {i}: split index {} out of order",
+                        node.split_word()
+                    ));
+                }
+                next_split += 1;
+            }
+            let s = decode_split(node.split_word(), &self.splits);
+            if !(s.is_finite() && b.min[axis] < s && s < b.max[axis]) {
+                return Err(format!(
+                    "node {i}: split {s} on axis {axis} not strictly inside [{}, {}]",
+                    b.min[axis], b.max[axis]
+                ));
+            }
+            if i + 1 >= self.nodes.len() || above <= i + 1 || above >= self.nodes.len() {
+                return Err(format!(
+                    "node {i}: children {} and {above} out of range",
+                    i + 1
+                ));
+            }
+            let (mut lo, mut hi) = (b, b);
+            lo.max[axis] = s;
+            hi.min[axis] = s;
+            stack.push((above, hi, depth + 1));
+            stack.push((i + 1, lo, depth + 1));
+        }
+        if visited != self.nodes.len() {
+            return Err(format!(
+                "{} of {} nodes reachable",
+                visited,
+                self.nodes.len()
+            ));
+        }
+        if next_ref != self.refs.len() {
+            return Err(format!(
+                "leaves use {next_ref} of {} references",
+                self.refs.len()
+            ));
+        }
+        if !inline_splits::<T>() && next_split != self.splits.len() {
+            return Err(format!(
+                "{next_split} of {} split positions used",
+                self.splits.len()
+            ));
+        }
+        if let Some(p) = referenced.iter().position(|&r| !r) {
+            return Err(format!("primitive {p} is in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::node::KdNode;
+    use crate::{KdTree, KdTreeParams};
+    use accel_core::{TriangleMesh, Vec3};
+
+    fn mesh() -> TriangleMesh<f64> {
+        let tris: Vec<[Vec3<f64>; 3]> = (0..64)
+            .map(|i| {
+                let (x, y) = (f64::from(i % 8), f64::from(i / 8));
+                [
+                    Vec3::new(x, y, 0.0),
+                    Vec3::new(x + 0.5, y, 0.2),
+                    Vec3::new(x, y + 0.5, 0.4),
+                ]
+            })
+            .collect();
+        TriangleMesh::from_triangles(&tris).unwrap()
+    }
+
+    /// Shallow, so that leaves hold several primitives.
+    fn params() -> KdTreeParams {
+        KdTreeParams {
+            max_depth: Some(3),
+            ..KdTreeParams::default()
+        }
+    }
+
+    #[test]
+    fn corruptions_are_reported() {
+        let m = mesh();
+        let good = KdTree::with_params(&m, &params()).unwrap();
+        assert!(good.validate().is_ok());
+        let inner = good.nodes.iter().position(|n| !n.is_leaf()).unwrap();
+        let leaf = good
+            .nodes
+            .iter()
+            .position(|n| n.is_leaf() && n.prim_count() >= 2)
+            .unwrap();
+
+        // A split moved outside its node's box.
+        let mut t = KdTree::with_params(&m, &params()).unwrap();
+        let n = t.nodes[inner];
+        t.splits[n.split_word() as usize] = 1e9;
+        assert!(t.validate().unwrap_err().contains("not strictly inside"));
+
+        // A leaf pointing at another leaf's references.
+        let mut t = KdTree::with_params(&m, &params()).unwrap();
+        let n = t.nodes[leaf];
+        t.nodes[leaf] = KdNode::leaf(n.prim_count(), n.leaf_payload() + 1);
+        assert!(t.validate().is_err());
+
+        // A primitive dropped from every leaf.
+        let mut t = KdTree::with_params(&m, &params()).unwrap();
+        let p = t.refs[0];
+        for r in t.refs.iter_mut().filter(|r| **r == p) {
+            *r = 63 - p;
+        }
+        for i in 0..t.nodes.len() {
+            if t.nodes[i].is_leaf()
+                && t.nodes[i].prim_count() == 1
+                && t.nodes[i].leaf_payload() == p
+            {
+                t.nodes[i] = KdNode::leaf(0, 0);
+            }
+        }
+        assert!(t.validate().is_err());
+
+        // An above child that skips a node.
+        let mut t = KdTree::with_params(&m, &params()).unwrap();
+        let n = t.nodes[0];
+        t.nodes[0] = KdNode::inner(n.axis(), n.split_word(), n.above_child() + 1);
+        assert!(t.validate().is_err());
+    }
+}

@@ -1,0 +1,288 @@
+//! The tree's shape: real splits, the naive build on a scene large enough to
+//! be built in parallel, named edge cases, and typed errors.
+
+use accel_core::scenes::{random_soup, teapot_in_stadium, uv_sphere};
+use accel_core::{Aabb, Accelerator, BruteForce, BuildError, Ray, Sphere, TriangleMesh, Vec3};
+use accel_kdtree::{KdTree, KdTreeParams};
+
+fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized>(
+    a: &KdTree<'_, T, P>,
+    b: &KdTree<'_, T, P>,
+) {
+    assert_eq!(a.nodes(), b.nodes());
+    assert_eq!(a.references(), b.references());
+    for i in 0..a.nodes().len() {
+        assert_eq!(
+            a.split_position(i).map(|s| s.to_bits_u64()),
+            b.split_position(i).map(|s| s.to_bits_u64())
+        );
+    }
+}
+
+#[test]
+fn sweep_equals_naive_on_a_parallel_build() {
+    // 3,000 soup triangles plus a sphere: the top levels are built in parallel
+    // (threshold 64), the rest serially; the naive builder is serial throughout.
+    let mut mesh = random_soup(3000, 5);
+    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 800))
+        .unwrap();
+    for params in [
+        KdTreeParams {
+            parallel_threshold: 64,
+            ..KdTreeParams::default()
+        },
+        KdTreeParams {
+            parallel_threshold: 64,
+            ..KdTreeParams::best_traversal()
+        },
+    ] {
+        let tree = KdTree::with_params(&mesh, &params).unwrap();
+        let naive = KdTree::with_params_naive(&mesh, &params).unwrap();
+        assert!(
+            tree.nodes().len() > 1000,
+            "{} nodes: the tree must really split",
+            tree.nodes().len()
+        );
+        assert_same_tree(&tree, &naive);
+        let m32 = mesh.cast::<f32>().unwrap();
+        assert_same_tree(
+            &KdTree::with_params(&m32, &params).unwrap(),
+            &KdTree::with_params_naive(&m32, &params).unwrap(),
+        );
+    }
+}
+
+#[test]
+fn sah_cost_beats_a_single_leaf_and_depth_is_bounded() {
+    let mesh = uv_sphere(Vec3::ZERO, 1.0, 20_000);
+    let params = KdTreeParams::default();
+    let tree = KdTree::with_params(&mesh, &params).unwrap();
+    let s = tree.stats();
+    let leaf_cost = params.intersect_cost * mesh.triangle_count() as f64;
+    let cost = s.extra("sah_cost").unwrap();
+    assert!(
+        cost < leaf_cost / 100.0,
+        "SAH cost {cost} vs one leaf {leaf_cost}"
+    );
+    assert!(s.extra("depth").unwrap() <= f64::from(tree.depth_limit()));
+    assert_eq!(
+        tree.depth_limit(),
+        params.depth_limit(mesh.triangle_count())
+    );
+    // Leaves tile the references; each triangle appears at least once.
+    assert!(s.references >= mesh.triangle_count());
+    assert_eq!(s.nodes, tree.nodes().len());
+    assert!(s.bytes >= 8 * s.nodes + 4 * tree.references().len());
+}
+
+#[test]
+fn teapot_in_a_stadium_isolates_the_teapot() {
+    let mesh = teapot_in_stadium(5_000, 1.0e4);
+    let tree = KdTree::new(&mesh).unwrap();
+    let brute = BruteForce::new(&mesh).unwrap();
+    // A ray from the camera toward the teapot sees few primitives.
+    let ray = Ray::new(Vec3::new(3.0, -4.0, 2.0), Vec3::new(-3.0, 4.0, -2.0)).unwrap();
+    let mut c = accel_core::TraversalCounters::default();
+    let hit = tree.intersect_counted(&ray, &mut c).unwrap();
+    assert_eq!(hit, brute.intersect(&ray).unwrap());
+    assert!(hit.is_some());
+    assert!(c.prims < 100, "{c:?}");
+}
+
+#[test]
+fn planar_primitives_in_a_split_plane_are_found_from_both_sides() {
+    // A wall of axis-aligned squares in the plane x = 1, and clutter on both
+    // sides, so the SAH splits at x = 1 with the wall on one side only.
+    let mut tris = Vec::new();
+    for j in 0..8 {
+        for k in 0..8 {
+            let (y, z) = (f64::from(j), f64::from(k));
+            let p = |dy: f64, dz: f64| Vec3::new(1.0, y + dy, z + dz);
+            tris.push([p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
+            tris.push([p(0.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)]);
+        }
+    }
+    for i in 0..64 {
+        let (y, z) = (f64::from(i % 8) + 0.25, f64::from(i / 8) + 0.25);
+        for x in [0.0, 0.5, 1.5, 2.0] {
+            tris.push([
+                Vec3::new(x, y, z),
+                Vec3::new(x + 0.1, y + 0.5, z),
+                Vec3::new(x, y, z + 0.5),
+            ]);
+        }
+    }
+    let mesh = TriangleMesh::from_triangles(&tris).unwrap();
+    let brute = BruteForce::new(&mesh).unwrap();
+    for params in [KdTreeParams::default(), KdTreeParams::best_traversal()] {
+        let tree = KdTree::with_params(&mesh, &params).unwrap();
+        let splits_at_wall = (0..tree.nodes().len())
+            .filter(|&i| {
+                !tree.nodes()[i].is_leaf()
+                    && tree.nodes()[i].axis() == 0
+                    && tree.split_position(i) == Some(1.0)
+            })
+            .count();
+        assert!(
+            splits_at_wall > 0,
+            "premise: the tree splits in the wall's plane"
+        );
+        for (ox, dx) in [
+            (-1.0, 1.0),
+            (3.0, -1.0),
+            (1.0, 1.0),
+            (1.0, -1.0),
+            (0.7, 1.0),
+            (1.3, -1.0),
+        ] {
+            for j in 0..=16 {
+                for k in 0..=16 {
+                    let (y, z) = (f64::from(j) * 0.5, f64::from(k) * 0.5);
+                    let ray = Ray::new(
+                        Vec3::new(ox, y + 0.01, z + 0.02),
+                        Vec3::new(dx, 0.003, -0.002),
+                    )
+                    .unwrap();
+                    assert_eq!(
+                        tree.intersect(&ray).unwrap(),
+                        brute.intersect(&ray).unwrap(),
+                        "{ray:?}"
+                    );
+                    // Along the wall (in its plane, ±0 in x): no hit on the wall itself.
+                    for zero in [0.0, -0.0] {
+                        let ray =
+                            Ray::new(Vec3::new(1.0, y, z), Vec3::new(zero, 1.0, 0.5)).unwrap();
+                        assert_eq!(
+                            tree.intersect(&ray).unwrap(),
+                            brute.intersect(&ray).unwrap(),
+                            "{ray:?}"
+                        );
+                        assert_eq!(tree.occluded(&ray).unwrap(), brute.occluded(&ray).unwrap());
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_single_flat_and_sphere_scenes() {
+    let empty = TriangleMesh::<f32>::new(vec![], vec![]).unwrap();
+    let tree = KdTree::new(&empty).unwrap();
+    let ray = Ray::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    assert_eq!(tree.intersect(&ray).unwrap(), None);
+    assert!(!tree.occluded(&ray).unwrap());
+    assert!(tree.bounds().is_empty());
+    assert_eq!(
+        tree.query_region(&Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)))
+            .unwrap(),
+        Vec::<u32>::new()
+    );
+
+    let one = TriangleMesh::from_triangles(&[[
+        Vec3::new(0.0f32, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    ]])
+    .unwrap();
+    let tree = KdTree::new(&one).unwrap();
+    let ray = Ray::new(Vec3::new(0.25, 0.25, 0.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+    assert_eq!(
+        tree.intersect(&ray).unwrap().map(|h| (h.t, h.prim)),
+        Some((1.0, 0))
+    );
+
+    // A flat scene: every triangle in z = 0 (the root box has no depth).
+    let mut tris = Vec::new();
+    for i in 0..200 {
+        let (x, y) = (f64::from(i % 20), f64::from(i / 20));
+        tris.push([
+            Vec3::new(x, y, 0.0),
+            Vec3::new(x + 1.0, y, 0.0),
+            Vec3::new(x, y + 1.0, 0.0),
+        ]);
+    }
+    let flat = TriangleMesh::from_triangles(&tris).unwrap();
+    let tree = KdTree::new(&flat).unwrap();
+    let brute = BruteForce::new(&flat).unwrap();
+    assert!(tree.nodes().len() > 1);
+    for i in 0..100 {
+        let (x, y) = (f64::from(i) * 0.2 + 0.05, f64::from(i) * 0.1 + 0.03);
+        for dz in [-1.0, 1.0] {
+            let ray = Ray::new(Vec3::new(x, y, -dz), Vec3::new(0.01, 0.02, dz)).unwrap();
+            assert_eq!(
+                tree.intersect(&ray).unwrap(),
+                brute.intersect(&ray).unwrap()
+            );
+        }
+    }
+
+    // Spheres: the default clipped bounds (bounds ∩ box).
+    let spheres: Vec<Sphere<f64>> = (0..300)
+        .map(|i| {
+            Sphere::new(
+                Vec3::new(
+                    f64::from(i % 10),
+                    f64::from(i / 10 % 10),
+                    f64::from(i / 100),
+                ),
+                0.3 + 0.01 * f64::from(i % 7),
+            )
+        })
+        .collect();
+    let tree = KdTree::new(spheres.as_slice()).unwrap();
+    let brute = BruteForce::new(spheres.as_slice()).unwrap();
+    for i in 0..200 {
+        let o = Vec3::new(-1.0, f64::from(i % 20) * 0.5, f64::from(i / 20) * 0.3);
+        let ray = Ray::new(o, Vec3::new(1.0, 0.05, 0.02)).unwrap();
+        assert_eq!(
+            tree.intersect(&ray).unwrap().map(|h| h.bit_key()),
+            brute.intersect(&ray).unwrap().map(|h| h.bit_key())
+        );
+    }
+    let r = Aabb::new(Vec3::new(2.5, 2.5, 0.5), Vec3::new(4.2, 3.1, 1.0));
+    assert_eq!(
+        tree.query_region(&r).unwrap(),
+        brute.query_region(&r).unwrap()
+    );
+}
+
+#[test]
+fn bad_input_gets_typed_errors() {
+    let bad = [Sphere::new(Vec3::new(0.0f32, f32::NAN, 0.0), 1.0)];
+    assert!(matches!(
+        KdTree::new(bad.as_slice()),
+        Err(BuildError::NonFinitePrimitive { index: 0 })
+    ));
+    let mesh = random_soup(10, 1);
+    let params = KdTreeParams {
+        empty_bonus: -0.5,
+        ..KdTreeParams::default()
+    };
+    assert!(matches!(
+        KdTree::with_params(&mesh, &params),
+        Err(BuildError::InvalidParameter {
+            name: "empty_bonus",
+            ..
+        })
+    ));
+    let tiny_budget = KdTreeParams {
+        max_references: 5,
+        ..KdTreeParams::default()
+    };
+    assert!(matches!(
+        KdTree::with_params(&mesh, &tiny_budget),
+        Err(BuildError::BudgetExceeded { .. })
+    ));
+    let tree = KdTree::new(&mesh).unwrap();
+    let nan_ray = Ray {
+        origin: Vec3::new(f64::NAN, 0.0, 0.0),
+        direction: Vec3::new(1.0, 0.0, 0.0),
+        t_min: 0.0,
+        t_max: f64::INFINITY,
+    };
+    assert!(tree.intersect(&nan_ray).is_err());
+    assert!(tree.occluded(&nan_ray).is_err());
+    let inf_region = Aabb::new(Vec3::splat(0.0), Vec3::new(f64::INFINITY, 1.0, 1.0));
+    assert!(tree.query_region(&inf_region).is_err());
+}
