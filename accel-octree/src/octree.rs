@@ -1,0 +1,116 @@
+//! The octree: its parts, construction and accessors.
+
+use crate::build::build;
+use crate::node::{LevelStats, Node};
+use crate::params::OctreeParams;
+use crate::stats::{accel_stats, level_stats};
+use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
+use accel_grid::cells::GridGeometry;
+use accel_grid::csr::CellLists;
+use std::time::Instant;
+
+/// An octree of nested uniform grids over a primitive set (see the crate docs).
+///
+/// It borrows the primitives and stores only `u32` indices into them.
+#[derive(Debug)]
+pub struct Octree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
+    pub(crate) prims: &'a P,
+    /// The grids, root first, each after its parent.
+    pub(crate) nodes: Vec<Node<T>>,
+    /// Every grid's cells: primitive lists and child links.
+    pub(crate) cells: CellLists,
+    pub(crate) levels: Vec<LevelStats>,
+    pub(crate) params: OctreeParams,
+    pub(crate) stats: AccelStats,
+    /// True when the octree holds no reference (nothing to hit).
+    pub(crate) empty: bool,
+}
+
+impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
+    /// Builds an octree with the default parameters ([`OctreeParams::default`]).
+    ///
+    /// # Errors
+    /// [`BuildError`] for non-finite primitives, more than
+    /// [`crate::MAX_PRIMITIVES`] of them, or a root grid over the memory budget.
+    pub fn new(prims: &'a P) -> Result<Self, BuildError> {
+        Self::with_params(prims, &OctreeParams::default())
+    }
+
+    /// Builds an octree with the given parameters.
+    ///
+    /// # Errors
+    /// [`BuildError::InvalidParameter`] for a parameter out of range, and the
+    /// errors of [`Octree::new`].
+    ///
+    /// # Panics
+    /// In debug builds, if [`Octree::validate`] finds a broken invariant (a bug).
+    pub fn with_params(prims: &'a P, params: &OctreeParams) -> Result<Self, BuildError> {
+        let start = Instant::now();
+        let built = build(prims, params)?;
+        let levels = level_stats(&built.nodes, &built.cells);
+        let bytes = built.nodes.capacity() * size_of::<Node<T>>()
+            + built
+                .nodes
+                .iter()
+                .map(|n| {
+                    (0..3)
+                        .map(|a| size_of_val(n.geometry.boundaries(a)))
+                        .sum::<usize>()
+                })
+                .sum::<usize>()
+            + built.cells.bytes()
+            + levels.capacity() * size_of::<LevelStats>();
+        let stats = accel_stats(
+            prims.len(),
+            start.elapsed(),
+            bytes,
+            &levels,
+            built.nodes[0].geometry.resolution(),
+            built.capped,
+        );
+        let octree = Self {
+            prims,
+            empty: built.cells.reference_count() == 0,
+            nodes: built.nodes,
+            cells: built.cells,
+            levels,
+            params: params.clone(),
+            stats,
+        };
+        #[cfg(debug_assertions)]
+        if let Err(e) = octree.validate() {
+            panic!("octree invariant broken after build: {e}");
+        }
+        Ok(octree)
+    }
+
+    /// The geometry of the root grid.
+    #[must_use]
+    pub fn root_geometry(&self) -> &GridGeometry<T> {
+        &self.nodes[0].geometry
+    }
+
+    /// The number of grids (the root and every child).
+    #[must_use]
+    pub fn grid_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Shape figures per level, root first: grids, cells, leaves, references.
+    #[must_use]
+    pub fn levels(&self) -> &[LevelStats] {
+        &self.levels
+    }
+
+    /// The parameters it was built with.
+    #[must_use]
+    pub fn params(&self) -> &OctreeParams {
+        &self.params
+    }
+
+    /// The indexed primitives.
+    #[must_use]
+    pub fn primitives(&self) -> &'a P {
+        self.prims
+    }
+}

@@ -1,0 +1,338 @@
+//! Queries: beam-walked grids, front to back through the levels.
+//!
+//! A query walks the root grid with `accel-grid`'s [`BeamWalk`], exactly as
+//! the uniform grid does. In a refined cell, the primitives that span it are
+//! tested, and its child grid is walked there and then: from the beam's own
+//! entry into the child's box ([`Aabb::beam_interval`]), no earlier than the
+//! ray's start, under the same stopping rule as every other walk ("the next
+//! cell lies past the best hit plus the hit tolerance"). Each walk therefore
+//! visits every one of its cells that the beam touches before the final best
+//! hit: the leaves that might hold a nearer hit, or a tie, are never skipped,
+//! whichever level they are on. A child's beam is narrowed to the rounding of
+//! what the child holds ([`narrowed`]): a dense cluster is walked as finely
+//! as if it stood alone. One [`Mailbox`] per query, on its stack, spans all
+//! levels.
+
+use crate::node::{Entry, Node, entry};
+use crate::octree::Octree;
+use accel_core::{
+    Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PreparedRay, PrimitiveSet,
+    QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalCounters, TraversalRay, nearer,
+    validate_region,
+};
+use accel_grid::cells::CellBox;
+use accel_grid::dda::BeamWalk;
+
+/// Calls `f` with every cell of `cells` (most often just one).
+#[inline]
+fn for_each_cell(cells: CellBox, mut f: impl FnMut([u32; 3])) {
+    if cells.lo == cells.hi {
+        f(cells.lo);
+    } else {
+        for c in cells.iter() {
+            f(c);
+        }
+    }
+}
+
+/// The beam for walking `node`: the parent's, narrowed to the rounding of
+/// what the node holds.
+///
+/// [`TraversalRay::new`] sizes the beam's half-width `delta` to the reach of
+/// the whole structure from the ray origin, `gamma(64)·max|corner − o|`: the
+/// bound on the rounding of any hit and of the walk's crossing parameters.
+/// Inside a child grid only the hits of primitives referenced there or below
+/// matter (a primitive that spans a refined cell stays in that cell, and is
+/// tested on the parent's beam), and those hits and the child's crossings lie
+/// in the node's `reach` box: the same bound over that box holds for them. So
+/// a small dense cluster far from a large scene's extremes is walked with a
+/// beam as thin as if it stood alone, not one that spans several of its cells.
+/// The parent's `t_start` and `t_end` (wider) are kept; `delta` never grows.
+#[inline]
+fn narrowed<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, inv_max_d: T) -> TraversalRay<T> {
+    let o = tr.ray().origin;
+    let reach = (node.reach.min - o)
+        .abs()
+        .max((node.reach.max - o).abs())
+        .max_component();
+    let delta = (T::gamma(TRAVERSAL_ROUNDINGS) * reach).min(tr.delta);
+    TraversalRay {
+        delta,
+        t_tol: (delta * inv_max_d).min(tr.t_tol),
+        ..*tr
+    }
+}
+
+/// `(1 + gamma(2)) / max|d_i|`: turns a beam half-width into the hit
+/// tolerance, as [`TraversalRay::new`] does.
+#[inline]
+fn tolerance_scale<T: Real>(tr: &TraversalRay<T>) -> T {
+    (T::ONE + T::gamma(2)) / tr.ray().direction.abs().max_component()
+}
+
+/// Where the walk of a child grid starts: the beam's entry into its box, no
+/// earlier than the ray's start; `None` when the beam misses the box, leaves
+/// it before the start, or enters it only after `limit`.
+#[inline]
+fn child_start<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, limit: T) -> Option<T> {
+    let r = tr.ray();
+    let (t0, t1) = node
+        .geometry
+        .bounds()
+        .beam_interval(r.origin, r.direction, tr.delta)?;
+    let from = t0.max(tr.t_start);
+    (from <= t1 && from <= limit).then_some(from)
+}
+
+/// The state of one nearest-hit query.
+struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
+    tree: &'q Octree<'a, T, P>,
+    prepared: PreparedRay<T>,
+    inv_max_d: T,
+    mailbox: Mailbox,
+    best: Option<Hit<T>>,
+    counter: &'q mut C,
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P, C> {
+    /// The last parameter a walk on beam `tr` may still reach: the end of
+    /// the beam, or the best hit plus the hit tolerance (a hit found in one
+    /// cell may lie beyond it: the seed's termination trap).
+    #[inline]
+    fn limit(&self, tr: &TraversalRay<T>) -> T {
+        match self.best {
+            Some(b) => tr.t_end.min(b.t + tr.t_tol),
+            None => tr.t_end,
+        }
+    }
+
+    /// Walks grid `node` on beam `tr` from parameter `from` until its next
+    /// cell lies past [`Nearest::limit`].
+    fn walk(&mut self, node: &Node<T>, tr: &TraversalRay<T>, from: T) {
+        let (mut walk, first) = BeamWalk::start(&node.geometry, tr, from);
+        let mut cells = first;
+        loop {
+            for_each_cell(cells, |c| self.cell(node, tr, c));
+            match walk.advance(self.limit(tr)) {
+                Some(next) => cells = next,
+                None => return,
+            }
+        }
+    }
+
+    /// Tests the primitives of one cell, then walks its child grid if it
+    /// has one.
+    #[inline]
+    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: [u32; 3]) {
+        self.counter.node();
+        let tree = self.tree;
+        let Entry { prims, child } = entry(
+            tree.cells
+                .cell(node.cell_index(node.geometry.linear_index(c))),
+        );
+        for &p in prims {
+            if self.mailbox.seen(p) {
+                continue;
+            }
+            self.counter.prim();
+            let t_max = self.best.map_or(self.prepared.ray.t_max, |b| b.t);
+            if let Some(h) = tree.prims.intersect(p as usize, &self.prepared, t_max) {
+                self.best = nearer(self.best, Hit::new(p, h));
+            }
+        }
+        if let Some(child) = child {
+            let child = &tree.nodes[child];
+            let beam = narrowed(tr, child, self.inv_max_d);
+            if let Some(from) = child_start(&beam, child, self.limit(&beam)) {
+                self.walk(child, &beam, from);
+            }
+        }
+    }
+}
+
+/// The state of one any-hit query.
+struct Any<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
+    tree: &'q Octree<'a, T, P>,
+    prepared: PreparedRay<T>,
+    inv_max_d: T,
+    mailbox: Mailbox,
+    counter: &'q mut C,
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> {
+    /// Walks grid `node` on beam `tr` from `from` to the end of the beam;
+    /// true at the first hit.
+    fn walk(&mut self, node: &Node<T>, tr: &TraversalRay<T>, from: T) -> bool {
+        let (mut walk, first) = BeamWalk::start(&node.geometry, tr, from);
+        let mut cells = first;
+        loop {
+            let mut found = false;
+            for_each_cell(cells, |c| found = found || self.cell(node, tr, c));
+            if found {
+                return true;
+            }
+            match walk.advance(tr.t_end) {
+                Some(next) => cells = next,
+                None => return false,
+            }
+        }
+    }
+
+    /// Whether a primitive of one cell, or of its child grid, is hit.
+    #[inline]
+    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: [u32; 3]) -> bool {
+        self.counter.node();
+        let tree = self.tree;
+        let Entry { prims, child } = entry(
+            tree.cells
+                .cell(node.cell_index(node.geometry.linear_index(c))),
+        );
+        let t_max = self.prepared.ray.t_max;
+        for &p in prims {
+            if self.mailbox.seen(p) {
+                continue;
+            }
+            self.counter.prim();
+            if tree
+                .prims
+                .intersect(p as usize, &self.prepared, t_max)
+                .is_some()
+            {
+                return true;
+            }
+        }
+        child.is_some_and(|child| {
+            let child = &tree.nodes[child];
+            let beam = narrowed(tr, child, self.inv_max_d);
+            child_start(&beam, child, beam.t_end).is_some_and(|from| self.walk(child, &beam, from))
+        })
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
+    /// The nearest hit, counting the work in `counter`.
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(None);
+        }
+        let root = &self.nodes[0];
+        let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+            return Ok(None);
+        };
+        let mut q = Nearest {
+            tree: self,
+            prepared: tr.prepared,
+            inv_max_d: tolerance_scale(&tr),
+            mailbox: Mailbox::new(),
+            best: None,
+            counter,
+        };
+        q.walk(root, &tr, tr.t_start);
+        Ok(q.best)
+    }
+
+    /// Whether anything is hit, counting the work in `counter`.
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(false);
+        }
+        let root = &self.nodes[0];
+        let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+            return Ok(false);
+        };
+        let mut q = Any {
+            tree: self,
+            prepared: tr.prepared,
+            inv_max_d: tolerance_scale(&tr),
+            mailbox: Mailbox::new(),
+            counter,
+        };
+        Ok(q.walk(root, &tr, tr.t_start))
+    }
+
+    /// Appends the references of every leaf overlapping `region`.
+    fn gather(&self, node: &Node<T>, region: &Aabb<T>, out: &mut Vec<u32>) {
+        let Some(cells) = node.geometry.cells_overlapping(region) else {
+            return;
+        };
+        for c in cells.iter() {
+            let Entry { prims, child } = entry(
+                self.cells
+                    .cell(node.cell_index(node.geometry.linear_index(c))),
+            );
+            out.extend_from_slice(prims);
+            if let Some(child) = child {
+                self.gather(&self.nodes[child], region, out);
+            }
+        }
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
+    fn bounds(&self) -> Aabb<T> {
+        if self.empty {
+            Aabb::empty()
+        } else {
+            *self.nodes[0].geometry.bounds()
+        }
+    }
+
+    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, &mut ())
+    }
+
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
+        self.any(ray, &mut ())
+    }
+
+    fn intersect_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        self.nearest(ray, counters)
+    }
+
+    fn occluded_counted(
+        &self,
+        ray: &Ray<T>,
+        counters: &mut TraversalCounters,
+    ) -> Result<bool, QueryError> {
+        self.any(ray, counters)
+    }
+
+    /// Gathers the references of every leaf near the region (grown by a
+    /// rounding allowance, so that a primitive the exact test accepts is never
+    /// missed), then keeps those the primitive's own overlap test accepts.
+    fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
+        validate_region(region)?;
+        if region.is_empty() || self.empty {
+            return Ok(Vec::new());
+        }
+        let root = &self.nodes[0];
+        let scale = region
+            .max_abs_coordinate()
+            .max(root.geometry.bounds().max_abs_coordinate());
+        let margin = T::gamma(64) * scale;
+        let grown = Aabb {
+            min: region.min.map(|x| (x - margin).next_down()),
+            max: region.max.map(|x| (x + margin).next_up()),
+        };
+        let mut found = Vec::new();
+        self.gather(root, &grown, &mut found);
+        found.sort_unstable();
+        found.dedup();
+        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
+        Ok(found)
+    }
+
+    fn stats(&self) -> AccelStats {
+        self.stats.clone()
+    }
+}
