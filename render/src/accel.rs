@@ -1,0 +1,396 @@
+//! The accelerators the binary knows, in one place.
+//!
+//! Adding an accelerator means one [`AccelKind`] variant, its name, one
+//! [`AccelConfig`] variant and one arm of [`build_config`]. `--accel auto`
+//! asks [`crate::choose`].
+
+use accel_core::{Accelerator, BruteForce, BuildError, PrimitiveSet, Real};
+use accel_grid::{Grid, GridParams};
+use accel_kdtree::{KdTree, KdTreeParams};
+use accel_octree::{Octree, OctreeParams};
+use clap::ValueEnum;
+use std::fmt;
+
+/// An acceleration structure the binary can build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AccelKind {
+    /// `accel_grid::Grid`: the uniform grid.
+    Grid,
+    /// `accel_octree::Octree`: the octree of nested grids.
+    Octree,
+    /// `accel_kdtree::KdTree`: the SAH kD-tree.
+    KdTree,
+    /// `accel_core::BruteForce`: every primitive for every ray (the reference).
+    Brute,
+}
+
+impl AccelKind {
+    /// Every kind, in report order.
+    pub const ALL: [Self; 4] = [Self::Grid, Self::Octree, Self::KdTree, Self::Brute];
+
+    /// The name used on the command line and in reports.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Grid => "grid",
+            Self::Octree => "octree",
+            Self::KdTree => "kdtree",
+            Self::Brute => "brute",
+        }
+    }
+}
+
+impl fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What `--accel` accepts: a kind, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AccelChoice {
+    /// The uniform grid.
+    Grid,
+    /// The octree of nested grids.
+    Octree,
+    /// The SAH kD-tree.
+    Kdtree,
+    /// Brute force (the reference; slow on large scenes).
+    Brute,
+    /// Chosen per scene and ray budget (structure and parameters) from a
+    /// short probe of build and query cost; the reason is printed.
+    Auto,
+}
+
+impl AccelChoice {
+    /// The kind named, or `None` for `auto`.
+    #[must_use]
+    pub const fn kind(self) -> Option<AccelKind> {
+        match self {
+            Self::Grid => Some(AccelKind::Grid),
+            Self::Octree => Some(AccelKind::Octree),
+            Self::Kdtree => Some(AccelKind::KdTree),
+            Self::Brute => Some(AccelKind::Brute),
+            Self::Auto => None,
+        }
+    }
+}
+
+/// Why an accelerator could not be built.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AccelError {
+    /// The build refused the scene.
+    #[error("building the {kind}: {source}")]
+    Build {
+        /// Which structure.
+        kind: AccelKind,
+        /// Why.
+        source: BuildError,
+    },
+}
+
+/// Builds the structure of `kind`, with its default parameters, over `prims`.
+///
+/// # Errors
+/// [`AccelError::Build`]: the structure's own [`BuildError`].
+pub fn build<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
+    kind: AccelKind,
+    prims: &'a P,
+) -> Result<Box<dyn Accelerator<T> + 'a>, AccelError> {
+    build_config(&AccelConfig::default_for(kind), prims)
+}
+
+/// Builds the structure `config` describes over `prims`.
+///
+/// # Errors
+/// [`AccelError::Build`]: the structure's own [`BuildError`] (parameters out
+/// of range are refused there, naming the parameter).
+pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
+    config: &AccelConfig,
+    prims: &'a P,
+) -> Result<Box<dyn Accelerator<T> + 'a>, AccelError> {
+    let kind = config.kind();
+    let wrap = |source| AccelError::Build { kind, source };
+    Ok(match config {
+        AccelConfig::Grid { density } => {
+            Box::new(Grid::with_params(prims, &GridParams::with_density(*density)).map_err(wrap)?)
+        }
+        AccelConfig::Octree(p) => Box::new(Octree::with_params(prims, p).map_err(wrap)?),
+        AccelConfig::KdTree(p) => Box::new(KdTree::with_params(prims, p).map_err(wrap)?),
+        AccelConfig::Brute => Box::new(BruteForce::new(prims).map_err(wrap)?),
+    })
+}
+
+/// An accelerator and its build parameters: the structure-quality dial.
+///
+/// - grid: density `m` (about `m³·n` cells; more cells mean fewer tests per
+///   ray but more cells walked and more memory);
+/// - octree: [`OctreeParams`] (split threshold, depth, resolution rules and
+///   presets);
+/// - kD-tree: [`KdTreeParams`] (SAH costs, empty bonus, leaf size, presets).
+#[derive(Clone, Debug, PartialEq)]
+pub enum AccelConfig {
+    /// A uniform grid of density `m`.
+    Grid {
+        /// Cells per object along each axis.
+        density: f64,
+    },
+    /// An octree of nested grids.
+    Octree(OctreeParams),
+    /// A SAH kD-tree.
+    KdTree(KdTreeParams),
+    /// Brute force.
+    Brute,
+}
+
+impl AccelConfig {
+    /// The structure with its default parameters.
+    #[must_use]
+    pub fn default_for(kind: AccelKind) -> Self {
+        match kind {
+            AccelKind::Grid => Self::Grid { density: 2.0 },
+            AccelKind::Octree => Self::Octree(OctreeParams::default()),
+            AccelKind::KdTree => Self::KdTree(KdTreeParams::default()),
+            AccelKind::Brute => Self::Brute,
+        }
+    }
+
+    /// Which structure.
+    #[must_use]
+    pub const fn kind(&self) -> AccelKind {
+        match self {
+            Self::Grid { .. } => AccelKind::Grid,
+            Self::Octree(_) => AccelKind::Octree,
+            Self::KdTree(_) => AccelKind::KdTree,
+            Self::Brute => AccelKind::Brute,
+        }
+    }
+
+    /// A short label: the kind and what differs from its defaults
+    /// (`grid m=3`, `octree classic`, `kdtree fast-build`, `kdtree ci=20`).
+    #[must_use]
+    pub fn label(&self) -> String {
+        match self {
+            Self::Grid { density } => format!("grid m={density}"),
+            Self::Octree(p) => match octree_preset_name(p) {
+                Some("default") => "octree".to_owned(),
+                Some(name) => format!("octree {name}"),
+                None => format!("octree t={} d={}", p.split_threshold, p.max_depth),
+            },
+            Self::KdTree(p) => match kdtree_preset_name(p) {
+                Some("default") => "kdtree".to_owned(),
+                Some(name) => format!("kdtree {name}"),
+                None => format!(
+                    "kdtree ci={} ct={} eb={}",
+                    p.intersect_cost, p.traversal_cost, p.empty_bonus
+                ),
+            },
+            Self::Brute => "brute".to_owned(),
+        }
+    }
+}
+
+impl fmt::Display for AccelConfig {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.label())
+    }
+}
+
+/// The octree presets by name.
+pub const OCTREE_PRESETS: [&str; 4] = ["default", "classic", "two-level", "grid-root"];
+/// The kD-tree presets by name.
+pub const KDTREE_PRESETS: [&str; 4] = ["default", "fast-build", "best-traversal", "pbrt"];
+
+/// The octree preset called `name` (see [`OCTREE_PRESETS`]).
+#[must_use]
+pub fn octree_preset(name: &str) -> Option<OctreeParams> {
+    Some(match name {
+        "default" => OctreeParams::default(),
+        "classic" => OctreeParams::classic(),
+        "two-level" => OctreeParams::two_level(),
+        "grid-root" => OctreeParams::grid_root(),
+        _ => return None,
+    })
+}
+
+/// The kD-tree preset called `name` (see [`KDTREE_PRESETS`]).
+#[must_use]
+pub fn kdtree_preset(name: &str) -> Option<KdTreeParams> {
+    Some(match name {
+        "default" => KdTreeParams::default(),
+        "fast-build" => KdTreeParams::fast_build(),
+        "best-traversal" => KdTreeParams::best_traversal(),
+        "pbrt" => KdTreeParams::pbrt(),
+        _ => return None,
+    })
+}
+
+fn octree_preset_name(p: &OctreeParams) -> Option<&'static str> {
+    OCTREE_PRESETS
+        .into_iter()
+        .find(|n| octree_preset(n).as_ref() == Some(p))
+}
+
+fn kdtree_preset_name(p: &KdTreeParams) -> Option<&'static str> {
+    KDTREE_PRESETS
+        .into_iter()
+        .find(|n| kdtree_preset(n).as_ref() == Some(p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use accel_core::scenes::uv_sphere;
+    use accel_core::{Ray, Vec3};
+
+    #[test]
+    fn every_available_kind_builds_and_answers_like_brute_force() {
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 500);
+        let ray = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        let reference = build(AccelKind::Brute, &mesh)
+            .unwrap()
+            .intersect(&ray)
+            .unwrap();
+        assert!(reference.is_some());
+        for kind in AccelKind::ALL {
+            let accel = build(kind, &mesh).unwrap();
+            assert_eq!(accel.stats().kind, kind.name());
+            assert_eq!(accel.intersect(&ray).unwrap(), reference, "{kind}");
+        }
+        // A build refusal names the structure.
+        let err = AccelError::Build {
+            kind: AccelKind::KdTree,
+            source: BuildError::TooManyPrimitives { count: 1 << 33 },
+        };
+        assert!(
+            err.to_string().starts_with("building the kdtree: "),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn configs_build_label_and_refuse_bad_parameters() {
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 500);
+        let ray = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        let reference = build(AccelKind::Brute, &mesh)
+            .unwrap()
+            .intersect(&ray)
+            .unwrap();
+        let mut labels = Vec::new();
+        let configs = [AccelConfig::Grid { density: 3.0 }]
+            .into_iter()
+            .chain(OCTREE_PRESETS.map(|n| AccelConfig::Octree(octree_preset(n).unwrap())))
+            .chain(KDTREE_PRESETS.map(|n| AccelConfig::KdTree(kdtree_preset(n).unwrap())));
+        for config in configs {
+            let accel = build_config(&config, &mesh).unwrap();
+            assert_eq!(accel.stats().kind, config.kind().name());
+            assert_eq!(accel.intersect(&ray).unwrap(), reference, "{config}");
+            labels.push(config.label());
+        }
+        assert_eq!(labels[0], "grid m=3");
+        assert_eq!(labels[1], "octree");
+        assert_eq!(labels[2], "octree classic");
+        assert_eq!(labels[6], "kdtree fast-build");
+        let custom = KdTreeParams {
+            intersect_cost: 20.0,
+            ..KdTreeParams::default()
+        };
+        assert_eq!(
+            AccelConfig::KdTree(custom).label(),
+            "kdtree ci=20 ct=1 eb=0.3"
+        );
+        // Out-of-range parameters are refused by the structure, by name.
+        let bad = AccelConfig::KdTree(KdTreeParams {
+            empty_bonus: 1.5,
+            ..KdTreeParams::default()
+        });
+        let err = build_config(&bad, &mesh).err().unwrap().to_string();
+        assert!(err.contains("empty_bonus"), "{err}");
+        let err = build_config(&AccelConfig::Grid { density: -1.0 }, &mesh)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.starts_with("building the grid"), "{err}");
+        assert!(octree_preset("nope").is_none() && kdtree_preset("nope").is_none());
+    }
+
+    #[test]
+    fn moller_trumbore_equals_brute_force_in_every_accelerator() {
+        use crate::tradeoff::leaks::leak_rays;
+        use accel_core::scenes::{SplitMix64, random_rays};
+        use accel_core::{MollerTrumboreMesh, TriangleMesh};
+        // Closed shapes (shared edges and vertices to aim at) and a soup.
+        let mut mesh = uv_sphere(Vec3::new(0.2, 0.1, -0.3), 1.0, 3_000);
+        mesh.append(&accel_core::scenes::torus(
+            Vec3::new(2.5, 0.0, 0.0),
+            1.0,
+            0.3,
+            40,
+            16,
+        ))
+        .unwrap();
+        mesh.append(&accel_core::scenes::random_soup(500, 4))
+            .unwrap();
+        let mut rays: Vec<Ray<f64>> = leak_rays(&mesh, 3_000, 9);
+        rays.extend(random_rays::<f64>(&mesh.bounds(), 1_000, 2));
+        let mut rng = SplitMix64::new(1);
+        for r in &mut rays {
+            // Unbounded versions too: hits past the aimed-at target count.
+            if rng.next_f64() < 0.5 {
+                r.t_max = f64::INFINITY;
+            }
+        }
+        let check = |mesh: &TriangleMesh<f32>| {
+            let fast = MollerTrumboreMesh::new(mesh);
+            let brute = build(AccelKind::Brute, &fast).unwrap();
+            let watertight = build(AccelKind::Brute, mesh).unwrap();
+            let rays32: Vec<Ray<f32>> = rays.iter().map(|r| r.cast()).collect();
+            let reference: Vec<_> = rays32.iter().map(|r| brute.intersect(r).unwrap()).collect();
+            // The premise: the two tests answer differently somewhere.
+            let differ = rays32
+                .iter()
+                .zip(&reference)
+                .filter(|(r, h)| watertight.intersect(r).unwrap() != **h)
+                .count();
+            assert!(
+                differ > 0,
+                "the tests never differ: the check proves nothing"
+            );
+            let configs = [
+                AccelConfig::Grid { density: 1.0 },
+                AccelConfig::Grid { density: 3.0 },
+            ]
+            .into_iter()
+            .chain(OCTREE_PRESETS.map(|n| AccelConfig::Octree(octree_preset(n).unwrap())))
+            .chain(KDTREE_PRESETS.map(|n| AccelConfig::KdTree(kdtree_preset(n).unwrap())));
+            for config in configs {
+                let accel = build_config(&config, &fast).unwrap();
+                for (r, want) in rays32.iter().zip(&reference) {
+                    let got = accel.intersect(r).unwrap();
+                    assert_eq!(
+                        got.map(|h| h.bit_key()),
+                        want.map(|h| h.bit_key()),
+                        "{config}: {r:?}"
+                    );
+                    assert_eq!(
+                        accel.occluded(r).unwrap(),
+                        want.is_some(),
+                        "{config}: {r:?}"
+                    );
+                }
+            }
+        };
+        check(&mesh.cast::<f32>().unwrap());
+    }
+
+    #[test]
+    fn choices_name_their_kinds() {
+        assert_eq!(AccelChoice::Kdtree.kind(), Some(AccelKind::KdTree));
+        assert_eq!(AccelChoice::Auto.kind(), None);
+        for k in AccelKind::ALL {
+            let parsed = AccelChoice::from_str(k.name(), false).unwrap();
+            assert_eq!(parsed.kind(), Some(k));
+        }
+    }
+}

@@ -1,0 +1,451 @@
+//! The two commands, end to end: check the arguments, load, build, trace,
+//! report, write.
+//!
+//! Everything that can be refused is checked before the expensive work:
+//! output paths are opened (as temporary files) and ray files read before the
+//! scene is built.
+
+use crate::accel::{self, AccelConfig, AccelKind};
+use crate::bench::{self, BenchReport, RayKind, RaySet, SetInfo};
+use crate::choose::{self, ProbeRay};
+use crate::cli::{self, BenchArgs, Precision, RenderArgs};
+use crate::heatmap::heat_map;
+use crate::output::PendingFile;
+use crate::rayfile;
+use crate::scene::{Scene, SceneSource};
+use crate::shade::{Pixel, Shader, Tally, to_srgb8};
+use crate::tiles::{for_each_pixel, progress_bar};
+use accel_core::{Accelerator, MollerTrumboreMesh, PrimitiveSet, Real, TriangleMesh, TriangleTest};
+use anyhow::{Context, Result, bail};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Sets the number of rayon worker threads, if asked.
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .with_context(|| format!("cannot start {n} threads"))?;
+    }
+    Ok(())
+}
+
+/// Refuses output names the PNG encoder would not match.
+pub(crate) fn check_png_name(path: &Path, option: &str) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("png") {
+        bail!(
+            "{option} {}: only PNG output is supported (use a .png file name)",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// The mesh in the query precision.
+pub(crate) fn mesh_in<T: Real>(scene: &Scene) -> Result<TriangleMesh<T>> {
+    scene.mesh.cast::<T>().with_context(|| {
+        format!(
+            "{}: the scene does not fit in {} (use --precision f64)",
+            scene.name,
+            T::NAME
+        )
+    })
+}
+
+/// Loads the scene named by a SCENE argument, reporting how long it took.
+pub(crate) fn load_scene(arg: &str) -> Result<Scene> {
+    let start = Instant::now();
+    let scene = SceneSource::parse(arg)?.load()?;
+    let b = scene.mesh.bounds();
+    println!(
+        "scene {}: {} triangles, bounds ({:.4}, {:.4}, {:.4}) .. ({:.4}, {:.4}, {:.4}), loaded in {:.1} ms",
+        scene.name,
+        scene.mesh.triangle_count(),
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.max.x,
+        b.max.y,
+        b.max.z,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    for note in &scene.notes {
+        println!("  {note}");
+    }
+    Ok(scene)
+}
+
+/// `render [SCENE]`: renders to `--out`, and the heat map if asked.
+///
+/// # Errors
+/// Every refusal, as one line naming the problem.
+pub fn run_render(args: &RenderArgs) -> Result<()> {
+    cli::check_render_totals(args).map_err(anyhow::Error::msg)?;
+    check_png_name(&args.out, "--out")?;
+    if let Some(h) = &args.heatmap {
+        check_png_name(h, "--heatmap")?;
+    }
+    let out = PendingFile::create(&args.out)?;
+    let heat_out = args
+        .heatmap
+        .as_deref()
+        .map(PendingFile::create)
+        .transpose()?;
+    set_threads(args.threads)?;
+    let kinds: Vec<AccelKind> = args.accel.kind().into_iter().collect();
+    args.dials
+        .check_structure_options(&kinds, kinds.is_empty())
+        .map_err(anyhow::Error::msg)?;
+    let scene_arg = args.scene.as_deref().unwrap_or(crate::scene::DEFAULT_SCENE);
+    if scene_arg.to_ascii_lowercase().ends_with(".png") {
+        bail!(
+            "{scene_arg} is an image, not a scene (name the heat map with --heatmap={scene_arg})"
+        );
+    }
+    let scene = load_scene(scene_arg)?;
+    match args.precision {
+        Precision::F32 => render_in::<f32>(args, &scene, out, heat_out),
+        Precision::F64 => render_in::<f64>(args, &scene, out, heat_out),
+    }
+}
+
+fn render_in<T: Real>(
+    args: &RenderArgs,
+    scene: &Scene,
+    out: PendingFile,
+    heat_out: Option<PendingFile>,
+) -> Result<()> {
+    let mesh = mesh_in::<T>(scene)?;
+    match args.dials.triangle_test.test() {
+        TriangleTest::Watertight => render_with(args, scene, &mesh, &mesh, out, heat_out),
+        TriangleTest::MollerTrumbore => {
+            let fast = MollerTrumboreMesh::new(&mesh);
+            render_with(args, scene, &mesh, &fast, out, heat_out)
+        }
+    }
+}
+
+/// The rays a render of `args` traces: pixels × spp × (primary, shadow, AO).
+fn expected_render_rays(args: &RenderArgs) -> u64 {
+    u64::from(args.width) * u64::from(args.height) * u64::from(args.spp) * (2 + u64::from(args.ao))
+}
+
+fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    args: &RenderArgs,
+    scene: &Scene,
+    mesh: &TriangleMesh<T>,
+    prims: &P,
+    out: PendingFile,
+    heat_out: Option<PendingFile>,
+) -> Result<()> {
+    let offset = args.dials.spawn_offset::<T>();
+    let accel = match args.accel.kind() {
+        Some(kind) => accel::build_config(&args.dials.config(kind), prims)?,
+        None => {
+            let choice = choose::choose(prims, expected_render_rays(args), |a| {
+                choose::view_probe(
+                    a,
+                    mesh,
+                    &scene.view,
+                    choose::ProbeShape {
+                        width: args.width,
+                        height: args.height,
+                        ao: args.ao,
+                        primaries: choose::PROBE_PRIMARIES,
+                    },
+                    offset,
+                )
+            })
+            .context("choosing the accelerator")?;
+            println!("auto: {} ({})", choice.config, choice.reason);
+            choice.accel
+        }
+    };
+    println!(
+        "build {} [{} {}, {}, spawn {}]",
+        accel.stats(),
+        T::NAME,
+        args.dials.triangle_test.test(),
+        config_note(args.accel.kind().map(|k| args.dials.config(k))),
+        offset
+    );
+    let (w, h) = (args.width, args.height);
+    let shader = Shader {
+        accel: accel.as_ref(),
+        mesh,
+        scene,
+        width: w,
+        height: h,
+        spp: args.spp,
+        ao: args.ao,
+        count: heat_out.is_some(),
+        spawn: offset,
+    };
+    let bar = progress_bar(u64::from(w) * u64::from(h), "render");
+    let start = Instant::now();
+    let pixels = for_each_pixel(w, h, &bar, |x, y| {
+        shader
+            .pixel(x, y)
+            .with_context(|| format!("pixel ({x}, {y}) in {}", T::NAME))
+    })?;
+    let elapsed = start.elapsed();
+    bar.finish_and_clear();
+    let mut tally = Tally::default();
+    for p in &pixels {
+        tally.add(&p.tally);
+    }
+    report_trace(&tally, elapsed, w, h, args, accel.as_ref());
+    let rgb: Vec<u8> = pixels
+        .iter()
+        .flat_map(|p: &Pixel| p.rgb.map(to_srgb8))
+        .collect();
+    let dest = out.dest().display().to_string();
+    out.write_png(w, h, &rgb)?;
+    println!("wrote {dest}");
+    if let Some(heat_out) = heat_out {
+        let work: Vec<_> = pixels.iter().map(|p| p.primary_work).collect();
+        let (img, stats) = heat_map(w, h, args.spp, &work);
+        println!(
+            "heat map: primary rays visit {:.1} cells/nodes (max {:.0}) and test {:.1} primitives (max {:.0}) per ray",
+            stats.mean_nodes, stats.max_nodes, stats.mean_tests, stats.max_tests
+        );
+        let dest = heat_out.dest().display().to_string();
+        heat_out.write_png(img.width, img.height, &img.rgb)?;
+        println!("wrote {dest}");
+    }
+    Ok(())
+}
+
+fn report_trace<T: Real>(
+    t: &Tally,
+    elapsed: Duration,
+    w: u32,
+    h: u32,
+    args: &RenderArgs,
+    accel: &dyn Accelerator<T>,
+) {
+    let secs = elapsed.as_secs_f64();
+    println!(
+        "trace {}x{}, {} spp, {} ao rays, {}: {} rays in {:.3} s ({:.2} Mrays/s on {} threads)",
+        w,
+        h,
+        args.spp,
+        args.ao,
+        T::NAME,
+        t.rays(),
+        secs,
+        t.rays() as f64 / secs.max(1e-9) / 1e6,
+        rayon::current_num_threads()
+    );
+    println!(
+        "hits: primary {}/{}, shadow blocked {}/{}, ao blocked {}/{}, digest {:016x}",
+        t.primary_hits, t.primary, t.shadow_blocked, t.shadow, t.ao_blocked, t.ao, t.digest
+    );
+    if t.work.nodes + t.work.prims > 0 {
+        println!(
+            "work ({}): {:.1} cells/nodes and {:.1} primitive tests per ray",
+            accel.stats().kind,
+            t.work.nodes as f64 / t.rays().max(1) as f64,
+            t.work.prims as f64 / t.rays().max(1) as f64
+        );
+    }
+}
+
+/// `render bench [SCENE]`: measures the accelerators and prints the table.
+///
+/// # Errors
+/// Every refusal, as one line naming the problem; also when accelerators
+/// disagree on any answer (after the table and JSON are written).
+pub fn run_bench(args: &BenchArgs) -> Result<()> {
+    cli::check_bench_totals(args).map_err(anyhow::Error::msg)?;
+    let named: Vec<AccelKind> = args.accel.iter().filter_map(|c| c.kind()).collect();
+    let structures = if args.accel.is_empty() {
+        AccelKind::ALL.to_vec()
+    } else {
+        named
+    };
+    args.dials
+        .check_structure_options(&structures, args.accel.iter().any(|c| c.kind().is_none()))
+        .map_err(anyhow::Error::msg)?;
+    let json_out = args.json.as_deref().map(PendingFile::create).transpose()?;
+    let rays_out = args
+        .write_rays
+        .as_deref()
+        .map(PendingFile::create)
+        .transpose()?;
+    let file_rays = args.rays.as_deref().map(rayfile::read).transpose()?;
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .with_context(|| format!("cannot start {threads} threads"))?;
+    let scene = load_scene(&args.scene)?;
+    let io = BenchIo {
+        json_out,
+        rays_out,
+        file_rays,
+        threads,
+    };
+    pool.install(|| match args.precision {
+        Precision::F32 => bench_in::<f32>(args, &scene, io),
+        Precision::F64 => bench_in::<f64>(args, &scene, io),
+    })
+}
+
+/// What `run_bench` prepares before the scene is built.
+struct BenchIo {
+    json_out: Option<PendingFile>,
+    rays_out: Option<PendingFile>,
+    file_rays: Option<Vec<accel_core::Ray<f32>>>,
+    threads: usize,
+}
+
+fn bench_in<T: Real>(args: &BenchArgs, scene: &Scene, io: BenchIo) -> Result<()> {
+    let mesh = mesh_in::<T>(scene)?;
+    match args.dials.triangle_test.test() {
+        TriangleTest::Watertight => bench_with(args, scene, &mesh, &mesh, io),
+        TriangleTest::MollerTrumbore => {
+            let fast = MollerTrumboreMesh::new(&mesh);
+            bench_with(args, scene, &mesh, &fast, io)
+        }
+    }
+}
+
+fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    args: &BenchArgs,
+    scene: &Scene,
+    mesh: &TriangleMesh<T>,
+    prims: &P,
+    io: BenchIo,
+) -> Result<()> {
+    // The structures named, without repeats; `auto` is resolved below.
+    let mut configs: Vec<AccelConfig> = Vec::new();
+    for kind in args.accel.iter().filter_map(|c| c.kind()) {
+        let config = args.dials.config(kind);
+        if !configs.contains(&config) {
+            configs.push(config);
+        }
+    }
+    let (sets, source) = match io.file_rays {
+        Some(rays) => (
+            vec![RaySet {
+                kind: RayKind::File,
+                rays: rays.iter().map(accel_core::Ray::cast).collect(),
+            }],
+            args.rays
+                .as_deref()
+                .map_or_else(String::new, |p| p.display().to_string()),
+        ),
+        None => {
+            // Any accelerator gives the same primary hits: use the grid.
+            let generator = accel::build(AccelKind::Grid, prims)?;
+            let sets = bench::generate_rays_from(
+                generator.as_ref(),
+                mesh,
+                &scene.view,
+                args.width,
+                args.height,
+                args.dials.spawn_offset(),
+            )
+            .context("generating rays")?
+            .sets;
+            (
+                sets,
+                format!("generated from a {}x{} view", args.width, args.height),
+            )
+        }
+    };
+    if args.accel.iter().any(|c| c.kind().is_none()) {
+        let total: u64 = sets.iter().map(|s| s.rays.len() as u64).sum();
+        let probe: Vec<ProbeRay<T>> = sets
+            .iter()
+            .flat_map(|s| {
+                s.rays.iter().map(|&ray| ProbeRay {
+                    ray,
+                    any_hit: s.kind.any_hit(),
+                })
+            })
+            .collect();
+        let choice =
+            choose::choose(prims, total, |_| Ok(probe)).context("choosing the accelerator")?;
+        println!("auto: {} ({})", choice.config, choice.reason);
+        if !configs.contains(&choice.config) {
+            configs.push(choice.config);
+        }
+    }
+    let total_rays: usize = sets.iter().map(|s| s.rays.len()).sum();
+    if configs.is_empty() {
+        configs = bench::default_accels(mesh.triangle_count(), total_rays)
+            .into_iter()
+            .map(|k| args.dials.config(k))
+            .collect();
+    }
+    println!(
+        "rays ({source}): {}",
+        sets.iter()
+            .map(|s| format!("{} {}", s.kind.name(), s.rays.len()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if let Some(out) = io.rays_out {
+        let all: Vec<_> = sets.iter().flat_map(|s| s.rays.iter().copied()).collect();
+        let dest = out.dest().display().to_string();
+        out.write_all(&rayfile::encode(&all))?;
+        println!("wrote {} rays to {dest} (in the order listed)", all.len());
+    }
+    let min_time = Duration::from_secs_f64(args.min_time);
+    println!("{}", bench::table_header(io.threads));
+    let mut results = Vec::new();
+    for config in &configs {
+        let r = bench::measure_accel(config, prims, &sets, min_time)?;
+        for row in bench::table_rows(&r) {
+            println!("{row}");
+        }
+        results.push(r);
+    }
+    let disagreement = bench::disagreement(&results);
+    let report = BenchReport {
+        scene: scene.name.clone(),
+        triangles: mesh.triangle_count() as u64,
+        precision: T::NAME,
+        threads: io.threads,
+        ray_source: source,
+        ray_sets: sets
+            .iter()
+            .map(|s| SetInfo {
+                kind: s.kind,
+                rays: s.rays.len() as u64,
+            })
+            .collect(),
+        min_time_s: args.min_time,
+        accelerators: results,
+        agree: disagreement.is_none(),
+    };
+    if let Some(out) = io.json_out {
+        let json = serde_json::to_vec_pretty(&report).context("encoding the JSON report")?;
+        let dest = out.dest().display().to_string();
+        out.write_all(&json)?;
+        println!("wrote {dest}");
+    }
+    match disagreement {
+        Some(msg) => bail!("{msg}"),
+        None => {
+            if report.accelerators.len() > 1 {
+                println!("all accelerators agree on every answer");
+            }
+            Ok(())
+        }
+    }
+}
+
+/// The structure's parameters for the build line, or "auto".
+fn config_note(config: Option<AccelConfig>) -> String {
+    config.map_or_else(|| "auto".to_owned(), |c| c.label())
+}

@@ -1,0 +1,272 @@
+//! `render choose-bench`: is `--accel auto` within 10% of the best choice?
+//!
+//! For every scene and two ray budgets of a render (`preview`: 160×120,
+//! 1 spp, 1 occlusion ray; `final`: 800×600, 2 spp, 4 occlusion rays; each
+//! `pixels × spp × (2 + ao)` rays), every accelerator and preset is built
+//! once (timed) and traces a sample of that render's ray mix (primary,
+//! shadow and occlusion rays from a view of about `--sample-primaries`
+//! primary rays; the faster of two passes). Its total for a budget is
+//! `build + rays × time per ray`. Then [`crate::choose::choose`] runs as
+//! `render --accel auto` would, and its choice's total (from the same table,
+//! so that both sides share one measurement) is compared with the best.
+//! The chooser's own cost (its probe, less the winner's build) is reported
+//! beside it.
+
+use crate::accel::{AccelConfig, build_config, kdtree_preset, octree_preset};
+use crate::app::{load_scene, mesh_in};
+use crate::choose::{self, ProbeRay, brute_per_ray, per_ray, view_probe};
+use crate::cli::threads_parser;
+use crate::output::PendingFile;
+use crate::tradeoff::{scene_list, short_name};
+use accel_core::spawn::SpawnOffset;
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Options of `render choose-bench`.
+#[derive(Clone, Debug, Args)]
+pub struct ChooseBenchArgs {
+    /// A .gltf/.glb file, a built-in scene name, or `all`.
+    #[arg(value_name = "SCENE", default_value = "all")]
+    pub scene: String,
+    /// Write every candidate's estimate as CSV to this file.
+    #[arg(long, value_name = "FILE", default_value = "choose-bench.csv")]
+    pub csv: PathBuf,
+    /// Threads (builds, traces and the chooser) [default: all cores].
+    #[arg(long, value_parser = threads_parser(), allow_negative_numbers = true)]
+    pub threads: Option<usize>,
+    /// Primary rays of the sampled view (plus their shadow and occlusion rays).
+    #[arg(long, default_value_t = 12_288, value_parser = clap::value_parser!(u32).range(16..=4_000_000), allow_negative_numbers = true)]
+    pub sample_primaries: u32,
+}
+
+/// A render budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Budget {
+    /// Name.
+    pub name: &'static str,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Occlusion rays per sample.
+    pub ao: u32,
+}
+
+impl Budget {
+    /// Rays of the render: `pixels × spp × (2 + ao)`.
+    #[must_use]
+    pub fn rays(&self) -> u64 {
+        u64::from(self.width)
+            * u64::from(self.height)
+            * u64::from(self.spp)
+            * (2 + u64::from(self.ao))
+    }
+}
+
+/// The two budgets measured.
+pub const BUDGETS: [Budget; 2] = [
+    Budget {
+        name: "preview",
+        width: 160,
+        height: 120,
+        spp: 1,
+        ao: 1,
+    },
+    Budget {
+        name: "final",
+        width: 800,
+        height: 600,
+        spp: 2,
+        ao: 4,
+    },
+];
+
+/// Every candidate the benchmark measures: each structure with its presets.
+#[must_use]
+pub fn candidates() -> Vec<AccelConfig> {
+    let mut out: Vec<AccelConfig> = [1.0, 1.5, 2.0, 3.0]
+        .into_iter()
+        .map(|density| AccelConfig::Grid { density })
+        .collect();
+    out.extend(
+        crate::accel::OCTREE_PRESETS
+            .iter()
+            .filter_map(|p| octree_preset(p))
+            .map(AccelConfig::Octree),
+    );
+    out.extend(
+        crate::accel::KDTREE_PRESETS
+            .iter()
+            .filter_map(|p| kdtree_preset(p))
+            .map(AccelConfig::KdTree),
+    );
+    out.push(AccelConfig::Brute);
+    out
+}
+
+/// `render choose-bench`.
+///
+/// # Errors
+/// Every refusal, as one line naming the problem.
+pub fn run(args: &ChooseBenchArgs) -> Result<()> {
+    let csv_out = PendingFile::create(&args.csv)?;
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .with_context(|| format!("cannot start {threads} threads"))?;
+    let mut csv = String::from(
+        "scene,triangles,budget,rays,config,build_ms,ns_per_ray,total_s,chosen,best\n",
+    );
+    let mut summary = Vec::new();
+    println!(
+        "{:<18} {:<8} {:>9} {:<22} {:>9} {:<22} {:>9} {:>7} {:>10}",
+        "scene", "budget", "rays", "best", "total s", "auto", "total s", "ratio", "auto ms"
+    );
+    for name in scene_list(&args.scene) {
+        let scene = load_scene(&name)?;
+        let mesh = mesh_in::<f32>(&scene)?;
+        for budget in BUDGETS {
+            let rays = budget.rays();
+            let (table, choice) = pool.install(|| -> Result<_> {
+                let grid = crate::accel::build(crate::accel::AccelKind::Grid, &mesh)?;
+                let sample: Vec<ProbeRay<f32>> = view_probe(
+                    grid.as_ref(),
+                    &mesh,
+                    &scene.view,
+                    choose::ProbeShape {
+                        width: budget.width,
+                        height: budget.height,
+                        ao: budget.ao,
+                        primaries: args.sample_primaries,
+                    },
+                    SpawnOffset::ErrorBound,
+                )?;
+                drop(grid);
+                let mut table = Vec::new();
+                for config in candidates() {
+                    let (build_s, per) = if config == AccelConfig::Brute {
+                        (0.0, brute_per_ray(&mesh, &sample))
+                    } else {
+                        let t = Instant::now();
+                        let accel = build_config(&config, &mesh)?;
+                        let b = t.elapsed().as_secs_f64();
+                        (b, per_ray(accel.as_ref(), &sample)?)
+                    };
+                    table.push((config, build_s, per, build_s + rays as f64 * per));
+                }
+                let choice = choose::choose(&mesh, rays, |a| {
+                    view_probe(
+                        a,
+                        &mesh,
+                        &scene.view,
+                        choose::ProbeShape {
+                            width: budget.width,
+                            height: budget.height,
+                            ao: budget.ao,
+                            primaries: choose::PROBE_PRIMARIES,
+                        },
+                        SpawnOffset::ErrorBound,
+                    )
+                })?;
+                let chosen_build = choice
+                    .estimates
+                    .iter()
+                    .find(|e| e.config == choice.config)
+                    .map_or(0.0, |e| e.build_s);
+                let overhead = choice.elapsed.as_secs_f64() - chosen_build;
+                Ok((table, (choice.config, overhead, choice.reason)))
+            })?;
+            let best = table
+                .iter()
+                .min_by(|a, b| a.3.total_cmp(&b.3))
+                .expect("candidates")
+                .clone();
+            let (chosen, overhead, reason) = choice;
+            let chosen_total = table
+                .iter()
+                .find(|c| c.0 == chosen)
+                .map_or(f64::NAN, |c| c.3);
+            let ratio = chosen_total / best.3;
+            let short = short_name(&scene.name);
+            println!(
+                "{:<18} {:<8} {:>9} {:<22} {:>9.3} {:<22} {:>9.3} {:>7.3} {:>10.1}",
+                short,
+                budget.name,
+                rays,
+                best.0.label(),
+                best.3,
+                chosen.label(),
+                chosen_total,
+                ratio,
+                overhead * 1e3
+            );
+            println!("    auto: {reason}");
+            for (config, build_s, per, total) in &table {
+                csv += &format!(
+                    "{},{},{},{},{},{:.3},{:.2},{:.5},{},{}\n",
+                    short,
+                    mesh.triangle_count(),
+                    budget.name,
+                    rays,
+                    config.label(),
+                    build_s * 1e3,
+                    per * 1e9,
+                    total,
+                    u8::from(*config == chosen),
+                    u8::from(*config == best.0)
+                );
+            }
+            summary.push((short, budget.name, ratio));
+        }
+    }
+    let within = summary.iter().filter(|s| s.2 <= 1.10).count();
+    println!(
+        "auto within 10% of the best: {within} of {} scene × budget pairs{}",
+        summary.len(),
+        if within == summary.len() {
+            String::new()
+        } else {
+            format!(
+                "; not: {}",
+                summary
+                    .iter()
+                    .filter(|s| s.2 > 1.10)
+                    .map(|s| format!("{} {} ({:.2}×)", s.0, s.1, s.2))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        }
+    );
+    let dest = csv_out.dest().display().to_string();
+    csv_out.write_all(csv.as_bytes())?;
+    println!("wrote {dest}");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budgets_and_candidates() {
+        assert_eq!(BUDGETS[0].rays(), 160 * 120 * 3);
+        assert_eq!(BUDGETS[1].rays(), 800 * 600 * 2 * 6);
+        let c = candidates();
+        assert_eq!(c.len(), 4 + 4 + 4 + 1);
+        // Everything the chooser may pick is measured.
+        for density in choose::GRID_DENSITIES {
+            assert!(c.contains(&AccelConfig::Grid { density }));
+        }
+        assert!(c.contains(&AccelConfig::KdTree(
+            accel_kdtree::KdTreeParams::fast_build()
+        )));
+        assert!(c.contains(&AccelConfig::Octree(accel_octree::OctreeParams::default())));
+    }
+}

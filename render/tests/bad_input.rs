@@ -1,0 +1,299 @@
+//! Bad input, end to end: every refusal is one clear line on stderr and a
+//! non-zero exit, never a panic, and never a partial output file.
+
+mod common;
+
+use common::{Gltf, SQUARE, SQUARE_INDICES, assert_refused, entries, run};
+use std::path::Path;
+
+const TINY: [&str; 6] = ["--width", "8", "--height", "8", "--ao", "0"];
+
+/// Renders `scene` to `out.png` in `dir`, where `out.png` already holds an
+/// older picture, and checks the refusal left it, and nothing else, behind.
+fn refuse_scene(dir: &Path, scene: &str, needles: &[&str]) {
+    let out = dir.join("out.png");
+    std::fs::write(&out, b"old picture").unwrap();
+    let before = entries(dir);
+    let mut args = vec![scene, "--out", "out.png"];
+    args.extend(TINY);
+    let o = run(dir, &args);
+    assert_refused(&o, needles);
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        b"old picture",
+        "{scene}: output touched"
+    );
+    assert_eq!(entries(dir), before, "{scene}: files left behind");
+}
+
+#[test]
+fn missing_unreadable_and_unknown_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    refuse_scene(
+        dir.path(),
+        "missing.glb",
+        &["missing.glb", "cannot read the file"],
+    );
+    std::fs::create_dir(dir.path().join("folder.glb")).unwrap();
+    refuse_scene(dir.path(), "folder.glb", &["folder.glb", "cannot read"]);
+    refuse_scene(
+        dir.path(),
+        "sphere_1k",
+        &["sphere_1k", "built-in", "default"],
+    );
+}
+
+#[test]
+fn malformed_gltf_files() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("garbage.glb"), b"\x00\x01 this is not glTF").unwrap();
+    refuse_scene(
+        dir.path(),
+        "garbage.glb",
+        &["garbage.glb", "not a valid glTF file"],
+    );
+    std::fs::write(dir.path().join("json.gltf"), b"{ \"asset\": ").unwrap();
+    refuse_scene(
+        dir.path(),
+        "json.gltf",
+        &["json.gltf", "not a valid glTF file"],
+    );
+    // A binary glTF cut short in its header.
+    std::fs::write(dir.path().join("cut.glb"), b"glTF\x02\x00\x00\x00\xff\x00").unwrap();
+    refuse_scene(dir.path(), "cut.glb", &["cut.glb"]);
+    // An index past the last vertex.
+    Gltf {
+        positions: &SQUARE,
+        indices: Some(&[0, 1, 7]),
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "index.gltf");
+    refuse_scene(dir.path(), "index.gltf", &["index.gltf", "vertex 7"]);
+}
+
+#[test]
+fn unsupported_primitive_modes_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    for (mode, name) in [
+        (0, "POINTS"),
+        (1, "LINES"),
+        (2, "LINE_LOOP"),
+        (3, "LINE_STRIP"),
+    ] {
+        let file = format!("mode{mode}.gltf");
+        Gltf {
+            positions: &SQUARE,
+            indices: None,
+            mode,
+            nodes: r#"[{"mesh":0}]"#,
+            extra: "",
+        }
+        .write(dir.path(), &file);
+        refuse_scene(dir.path(), &file, &[&file, name, "not a triangle mode"]);
+    }
+}
+
+#[test]
+fn nan_vertices_and_empty_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut nan = SQUARE;
+    nan[2][1] = f32::NAN;
+    Gltf {
+        positions: &nan,
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "nan.gltf");
+    refuse_scene(
+        dir.path(),
+        "nan.gltf",
+        &["nan.gltf", "vertex 2", "non-finite"],
+    );
+    // A matrix with an infinity makes every vertex non-finite.
+    Gltf {
+        positions: &SQUARE,
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"mesh":0,"scale":[1e39,1,1]}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "inf.gltf");
+    refuse_scene(dir.path(), "inf.gltf", &["inf.gltf", "non-finite"]);
+    // Nodes without meshes: nothing to render.
+    Gltf {
+        positions: &SQUARE,
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"children":[]}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "empty.gltf");
+    refuse_scene(dir.path(), "empty.gltf", &["empty.gltf", "no triangles"]);
+    // Triangles that exist but are all degenerate are not an error: they
+    // render as empty space.
+    Gltf {
+        positions: &[[1.0, 1.0, 1.0]; 3],
+        indices: None,
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "point.gltf");
+    let o = run(
+        dir.path(),
+        &[
+            "point.gltf",
+            "--out",
+            "p.png",
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ],
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}
+
+#[test]
+fn bad_ray_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut good = b"RAYS".to_vec();
+    good.extend(1u32.to_le_bytes());
+    good.extend(2u64.to_le_bytes());
+    for ray in [[0.0f32, 0.0, 5.0, 0.0, 0.0, -1.0, 0.0, f32::INFINITY]; 2] {
+        good.extend(ray.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    let mut cases: Vec<(&str, Vec<u8>, &[&str])> = vec![
+        (
+            "short.rays",
+            good[..9].to_vec(),
+            &["shorter than the 16-byte header"],
+        ),
+        (
+            "magic.rays",
+            [b"SYAR", &good[4..]].concat(),
+            &["not \"RAYS\""],
+        ),
+        (
+            "version.rays",
+            [&good[..4], &7u32.to_le_bytes()[..], &good[8..]].concat(),
+            &["version 7"],
+        ),
+        (
+            "count.rays",
+            good[..good.len() - 4].to_vec(),
+            &["announces 2 rays"],
+        ),
+    ];
+    let mut nan = good.clone();
+    nan[16 + 32 + 8..16 + 32 + 12].copy_from_slice(&f32::NAN.to_le_bytes());
+    cases.push((
+        "nan.rays",
+        nan,
+        &["ray 1 is invalid", "origin is not finite"],
+    ));
+    for (name, bytes, needles) in cases {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+        let before = entries(dir.path());
+        let o = run(
+            dir.path(),
+            &[
+                "bench",
+                "--rays",
+                name,
+                "--json",
+                "b.json",
+                "--min-time",
+                "0",
+            ],
+        );
+        let mut all = vec![name];
+        all.extend(needles);
+        assert_refused(&o, &all);
+        assert_eq!(entries(dir.path()), before, "{name}: files left behind");
+    }
+    let o = run(dir.path(), &["bench", "--rays", "absent.rays"]);
+    assert_refused(&o, &["absent.rays", "cannot read"]);
+    // The good file is accepted (two rays, both hit the floor).
+    std::fs::write(dir.path().join("good.rays"), &good).unwrap();
+    let o = run(
+        dir.path(),
+        &[
+            "bench",
+            "--rays",
+            "good.rays",
+            "--accel",
+            "grid",
+            "--min-time",
+            "0",
+        ],
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}
+
+#[test]
+fn unwritable_outputs_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sub.png")).unwrap();
+    for (args, needles) in [
+        (
+            &["--out", "no/such/dir/x.png"][..],
+            &["no/such/dir/x.png"][..],
+        ),
+        (&["--out", "sub.png"], &["sub.png", "is a directory"]),
+        (&["--out", "x.jpg"], &["x.jpg", "only PNG"]),
+        (&["--heatmap=no/dir/h.png"], &["no/dir/h.png"]),
+        (&["bench", "--json", "no/dir/b.json"], &["no/dir/b.json"]),
+        (
+            &["bench", "--write-rays", "sub.png"],
+            &["sub.png", "is a directory"],
+        ),
+    ] {
+        let before = entries(dir.path());
+        let mut all: Vec<&str> = args.to_vec();
+        if args[0] == "bench" {
+            all.extend(["--width", "8", "--height", "8", "--min-time", "0"]);
+        } else {
+            all.extend(TINY);
+        }
+        let o = run(dir.path(), &all);
+        assert_refused(&o, needles);
+        // Refused before loading anything: no scene line was printed.
+        assert!(
+            common::stdout(&o).is_empty(),
+            "{args:?}: {}",
+            common::stdout(&o)
+        );
+        assert_eq!(entries(dir.path()), before, "{args:?}");
+    }
+}
+
+#[test]
+fn absurd_sizes_and_unknown_options() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needles) in [
+        (&["--width", "0"][..], &["--width", "0"][..]),
+        (&["--width", "100000"], &["--width", "100000"]),
+        (&["--height", "-5"], &["-5"]),
+        (&["--spp", "0"], &["--spp"]),
+        (&["--spp", "99999999"], &["--spp"]),
+        (&["--ao", "100000"], &["--ao"]),
+        (
+            &["--width", "16384", "--height", "16384"],
+            &["pixels", "over the limit"],
+        ),
+        (&["--accel", "bvh"], &["bvh"]),
+        (&["--precision", "f16"], &["f16"]),
+        (&["bench", "--min-time", "-1"], &["-1"]),
+        (&["bench", "--width", "0"], &["--width"]),
+        (&["--frobnicate"], &["--frobnicate"]),
+    ] {
+        let o = run(dir.path(), args);
+        assert_refused(&o, needles);
+        assert!(entries(dir.path()).is_empty(), "{args:?}");
+    }
+}
