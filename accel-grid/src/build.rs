@@ -66,7 +66,10 @@ pub(crate) struct Built<T> {
 
 /// The cells each primitive truly overlaps: the cells its bounds overlap,
 /// filtered by the primitive's exact (conservative) box test when the bounds
-/// span more than one cell.
+/// span more than one cell along two or more axes. A row of cells needs no
+/// test: a connected primitive whose bounds reach both ends crosses each (a
+/// disconnected primitive, or loose bounds, only adds references, which
+/// never changes an answer).
 pub struct PrimitiveCells<'a, T, P: ?Sized> {
     /// The grid.
     pub geometry: &'a GridGeometry<T>,
@@ -91,8 +94,14 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
         let Some(range) = self.geometry.cells_overlapping(&self.bounds[i]) else {
             return;
         };
-        if range.lo == range.hi {
-            cell(self.geometry.linear_index(range.lo));
+        // A primitive is connected and its bounds reach each extreme, so it
+        // crosses every cell of a range that is one cell thick along two
+        // axes (a row of cells): only wider ranges need the exact test.
+        let wide_axes = (0..3).filter(|&a| range.lo[a] != range.hi[a]).count();
+        if wide_axes <= 1 {
+            for c in range.iter() {
+                cell(self.geometry.linear_index(c));
+            }
             return;
         }
         for c in range.iter() {

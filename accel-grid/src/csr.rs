@@ -10,11 +10,13 @@
 
 use accel_core::BuildError;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 /// What the two-pass build asks of the thing being indexed: the cells each
 /// item belongs to. `visit` must call `cell` at most once per cell, with the
-/// same cells both times it is asked about one item.
+/// same cells each time it is asked about one item (the build usually asks
+/// once and records the answer; very large grids and over-budget builds ask
+/// again).
 pub trait CellVisitor: Sync {
     /// Calls `cell` with the linear index of every cell that `item` belongs to.
     fn visit<F: FnMut(usize)>(&self, item: u32, cell: F);
@@ -106,6 +108,13 @@ impl CellLists {
     }
 
     /// The two-pass build over items `id(0) .. id(len - 1)`.
+    ///
+    /// Pass 1 asks the visitor about each item once, counting every cell and
+    /// recording the item's cells per task; pass 2 places the references
+    /// from that record, so the visitor's work (for triangles, the exact
+    /// triangle-box tests that dominate the build) is done once, at the cost
+    /// of a temporary 4 bytes per reference. Grids with more cells than
+    /// `u32` indexes ask the visitor again instead.
     fn build_with<V: CellVisitor>(
         cell_count: usize,
         len: usize,
@@ -113,18 +122,33 @@ impl CellLists {
         max_references: u64,
         visitor: &V,
     ) -> Result<Self, BuildError> {
+        let budget = max_references.min(u64::from(u32::MAX));
+        let over_budget = |needed: u64| BuildError::BudgetExceeded {
+            what: "cell references",
+            needed,
+            budget,
+        };
         // slots[c + 1] counts cell c in pass 1, holds its start before pass 2 and
         // its end after it; slots[0] stays 0. The array becomes the offsets.
         let slots: Vec<AtomicU32> = (0..=cell_count).map(|_| AtomicU32::new(0)).collect();
         let cells = &slots[1..];
-        (0..len)
-            .into_par_iter()
-            .with_min_len(ITEMS_PER_TASK)
-            .for_each(|i| {
-                visitor.visit(id(i), |c| {
-                    cells[c].fetch_add(1, Ordering::Relaxed);
+        let recorded = if u32::try_from(cell_count).is_ok() {
+            match record_cells(len, &id, budget, visitor, cells) {
+                Ok(tasks) => Some(tasks),
+                // The record stopped early; count the whole need for the error.
+                Err(()) => return Err(over_budget(count_references(len, &id, visitor))),
+            }
+        } else {
+            (0..len)
+                .into_par_iter()
+                .with_min_len(ITEMS_PER_TASK)
+                .for_each(|i| {
+                    visitor.visit(id(i), |c| {
+                        cells[c].fetch_add(1, Ordering::Relaxed);
+                    });
                 });
-            });
+            None
+        };
 
         let mut slots: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
         let mut running: u64 = 0;
@@ -134,29 +158,38 @@ impl CellLists {
             *slot = running as u32;
             running += count;
         }
-        let budget = max_references.min(u64::from(u32::MAX));
         if running > budget {
-            return Err(BuildError::BudgetExceeded {
-                what: "cell references",
-                needed: running,
-                budget,
-            });
+            return Err(over_budget(running));
         }
         let total = running as usize;
 
         let slots: Vec<AtomicU32> = slots.into_iter().map(AtomicU32::new).collect();
         let refs: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
         let cells = &slots[1..];
-        (0..len)
-            .into_par_iter()
-            .with_min_len(ITEMS_PER_TASK)
-            .for_each(|i| {
-                let item = id(i);
-                visitor.visit(item, |c| {
-                    let at = cells[c].fetch_add(1, Ordering::Relaxed);
-                    refs[at as usize].store(item, Ordering::Relaxed);
-                });
+        let place = |item: u32, c: usize| {
+            let at = cells[c].fetch_add(1, Ordering::Relaxed);
+            refs[at as usize].store(item, Ordering::Relaxed);
+        };
+        if let Some(tasks) = recorded {
+            tasks.par_iter().for_each(|task| {
+                let mut start = 0;
+                for (k, &end) in task.ends.iter().enumerate() {
+                    let item = id(task.first + k);
+                    for &c in &task.cells[start..end as usize] {
+                        place(item, c as usize);
+                    }
+                    start = end as usize;
+                }
             });
+        } else {
+            (0..len)
+                .into_par_iter()
+                .with_min_len(ITEMS_PER_TASK)
+                .for_each(|i| {
+                    let item = id(i);
+                    visitor.visit(item, |c| place(item, c));
+                });
+        }
 
         let offsets: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
         let mut refs: Vec<u32> = refs.into_iter().map(AtomicU32::into_inner).collect();
@@ -252,6 +285,71 @@ fn sort_each_cell(offsets: &[u32], refs: &mut [u32]) {
     });
 }
 
+/// How many references the items have in all (for the budget error).
+fn count_references<V: CellVisitor>(
+    len: usize,
+    id: &(impl Fn(usize) -> u32 + Sync),
+    visitor: &V,
+) -> u64 {
+    (0..len)
+        .into_par_iter()
+        .with_min_len(ITEMS_PER_TASK)
+        .map(|i| {
+            let mut n = 0u64;
+            visitor.visit(id(i), |_| n += 1);
+            n
+        })
+        .sum()
+}
+
+/// The cells of a run of consecutive items, as pass 1 recorded them.
+struct RecordedTask {
+    /// Position of the run's first item.
+    first: usize,
+    /// Every item's cells, one item after the other.
+    cells: Vec<u32>,
+    /// Where each item's cells end in `cells`.
+    ends: Vec<u32>,
+}
+
+/// Pass 1 with a record: counts each item's cells into `counts` and keeps
+/// them per run of [`ITEMS_PER_TASK`] items. Stops once the references seen
+/// pass `budget`, so an oversized build fails before its record grows past
+/// the budget.
+fn record_cells<V: CellVisitor>(
+    len: usize,
+    id: &(impl Fn(usize) -> u32 + Sync),
+    budget: u64,
+    visitor: &V,
+    counts: &[AtomicU32],
+) -> Result<Vec<RecordedTask>, ()> {
+    let seen = AtomicU64::new(0);
+    (0..len.div_ceil(ITEMS_PER_TASK))
+        .into_par_iter()
+        .map(|task| {
+            let first = task * ITEMS_PER_TASK;
+            let last = (first + ITEMS_PER_TASK).min(len);
+            let mut cells = Vec::new();
+            let mut ends = Vec::with_capacity(last - first);
+            for i in first..last {
+                visitor.visit(id(i), |c| {
+                    counts[c].fetch_add(1, Ordering::Relaxed);
+                    // The caller checked that every cell index fits.
+                    cells.push(c as u32);
+                });
+                let so_far = seen.load(Ordering::Relaxed) + cells.len() as u64;
+                if so_far > budget {
+                    return Err(());
+                }
+                // Fits: cells.len() <= budget <= u32::MAX here.
+                ends.push(cells.len() as u32);
+            }
+            seen.fetch_add(cells.len() as u64, Ordering::Relaxed);
+            Ok(RecordedTask { first, cells, ends })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,11 +389,18 @@ mod tests {
 
     #[test]
     fn reference_budget_is_enforced() {
+        // The error reports the whole need, counted directly.
+        let mut all = 0u64;
+        for i in 0..100 {
+            Modular.visit(i, |_| all += 1);
+        }
         let err = CellLists::build(7, 100, 150, &Modular).unwrap_err();
         assert!(matches!(
             err,
-            BuildError::BudgetExceeded { needed, budget: 150, .. } if needed > 150
+            BuildError::BudgetExceeded { needed, budget: 150, .. } if needed == all
         ));
+        assert!(CellLists::build(7, 100, all, &Modular).is_ok());
+        assert!(CellLists::build(7, 100, all - 1, &Modular).is_err());
     }
 
     #[test]
