@@ -9,7 +9,9 @@ use crate::{Aabb, PreparedRay, PrimHit, Primitive, Real, Vec3};
 /// becomes the +z axis; the three 2D edge functions then decide the hit. A
 /// shared edge yields exactly negated edge functions in its two triangles, so a
 /// ray through an edge or vertex of a closed mesh always hits one of them.
-/// The edge functions are evaluated with exact sign ([`Real::diff_of_products`]);
+/// Everything runs in `f64`, so `t` is as accurate as the rounded inputs allow
+/// in `f32` too; the edge functions are evaluated with exact sign
+/// ([`Real::diff_of_products`]);
 /// both faces are hit (no culling); degenerate triangles (`det = 0`) never are.
 ///
 /// Returns the hit with `ray.t_min ≤ t ≤ t_max`; `u`, `v` are the barycentric
@@ -23,43 +25,44 @@ pub fn intersect_triangle<T: Real>(
     p2: Vec3<T>,
     t_max: T,
 ) -> Option<PrimHit<T>> {
-    let o = ray.ray.origin;
+    // Translation and shear in f64 (exact or nearly so for f32 inputs): in
+    // T, `p − o` rounds to T's spacing at |p|, which for a triangle much
+    // larger than its distance to the origin moves `t` by far more than an
+    // ulp (1e-4 relative in f32 on a floor 1e4 across). Every vertex still
+    // goes through the same transform, so shared edges stay watertight.
+    let w3 = |v: Vec3<T>| v.map(T::to_f64);
+    let o = w3(ray.ray.origin);
     let [kx, ky, kz] = ray.axes;
-    let s = ray.shear;
-    let a = p0 - o;
-    let b = p1 - o;
-    let c = p2 - o;
+    let s = w3(ray.shear);
+    let a = w3(p0) - o;
+    let b = w3(p1) - o;
+    let c = w3(p2) - o;
     let (ax, ay) = (a[kx] - s.x * a[kz], a[ky] - s.y * a[kz]);
     let (bx, by) = (b[kx] - s.x * b[kz], b[ky] - s.y * b[kz]);
     let (cx, cy) = (c[kx] - s.x * c[kz], c[ky] - s.y * c[kz]);
 
-    let u = T::diff_of_products(cx, by, cy, bx);
-    let v = T::diff_of_products(ax, cy, ay, cx);
-    let w = T::diff_of_products(bx, ay, by, ax);
-    let zero = <T::Wide as Real>::ZERO;
-    if (u < zero || v < zero || w < zero) && (u > zero || v > zero || w > zero) {
+    let u = f64::diff_of_products(cx, by, cy, bx);
+    let v = f64::diff_of_products(ax, cy, ay, cx);
+    let w = f64::diff_of_products(bx, ay, by, ax);
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }
     let det = u + v + w;
-    if det == zero {
+    if det == 0.0 {
         return None;
     }
-    // Scaled depths in the wide type: in T they can underflow to 0 (a huge
-    // direction), which would report t = 0 for any triangle the line meets.
-    let sz = s.z.to_wide();
-    let (az, bz, cz) = (
-        sz * a[kz].to_wide(),
-        sz * b[kz].to_wide(),
-        sz * c[kz].to_wide(),
-    );
+    // Depths in f64 too: in T they can underflow to 0 (a huge direction),
+    // which would report t = 0 for any triangle the line meets.
+    let (az, bz, cz) = (s.z * a[kz], s.z * b[kz], s.z * c[kz]);
     let t_scaled = u * az + v * bz + w * cz;
     // A parameter beyond T's range (tiny or huge directions) is no hit.
-    let t = T::hit_parameter(t_scaled / det, ray.ray.t_min, t_max)?;
-    let inv_det = <T::Wide as Real>::ONE / det;
+    let wide = <T::Wide as Real>::from_f64;
+    let t = T::hit_parameter(wide(t_scaled / det), ray.ray.t_min, t_max)?;
+    let inv_det = 1.0 / det;
     Some(PrimHit {
         t,
-        u: T::from_wide(v * inv_det),
-        v: T::from_wide(w * inv_det),
+        u: T::from_f64(v * inv_det),
+        v: T::from_f64(w * inv_det),
     })
 }
 
@@ -448,9 +451,47 @@ mod tests {
     }
 
     #[test]
+    fn t_is_accurate_on_a_triangle_much_larger_than_its_distance() {
+        // A floor at z = -1.5 with corners at ±5000 (f32 spacing there is
+        // 4.9e-4) and rays from near the origin whose largest component is
+        // horizontal: t must be the plane's own answer, (-1.5 - oz) / dz
+        // (computed in f64 from the same f32 inputs), to an ulp or two, not
+        // off by the rounding of the corners (bug found by `render peers`:
+        // 1e-4 relative before the transform ran in f64).
+        let (p0, p1, p2) = (
+            v::<f32>(-5000.0, -5000.0, -1.5),
+            v(5000.0, -5000.0, -1.5),
+            v(0.0, 5000.0, -1.5),
+        );
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..1000 {
+            let o = v::<f32>(next(), next(), 0.5 + next());
+            let d = v::<f32>(3.0 * next(), 3.0 * next(), -0.2 - next().abs());
+            let Some(h) = intersect_triangle(&ray(o, d), p0, p1, p2, f32::INFINITY) else {
+                panic!("a ray down from near the origin hits the floor");
+            };
+            let exact = (-1.5 - f64::from(o.z)) / f64::from(d.z);
+            let ulp = f64::from((exact as f32).next_up() - exact as f32);
+            assert!(
+                (f64::from(h.t) - exact).abs() <= 2.0 * ulp,
+                "t {} vs {exact} (o {o:?}, d {d:?})",
+                h.t
+            );
+        }
+    }
+
+    #[test]
     fn shared_edge_is_watertight() {
         // Two triangles of a square share the diagonal; rays through points of
-        // the diagonal must hit exactly one or both, never none.
+        // the diagonal must hit exactly one or both, never none. (Not its
+        // ends: they are corners of the open square, and a rounded direction
+        // aimed at a corner may pass just outside it.)
         let q = [
             v::<f32>(0.1, 0.3, 0.0),
             v(1.7, 0.2, 0.05),
@@ -458,7 +499,7 @@ mod tests {
             v(0.2, 1.1, -0.05),
         ];
         let mut misses = 0;
-        for i in 0..=1000 {
+        for i in 1..1000 {
             let s = i as f32 / 1000.0;
             let target = q[0] + (q[2] - q[0]) * s;
             let origin = v(0.37, -0.21, 5.0);
