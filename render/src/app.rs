@@ -387,13 +387,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
             .map(|k| args.dials.config(k))
             .collect();
     }
-    println!(
-        "rays ({source}): {}",
-        sets.iter()
-            .map(|s| format!("{} {}", s.kind.name(), s.rays.len()))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    println!("rays ({source}): {}", bench::describe_sets(&sets));
     if let Some(out) = io.rays_out {
         let all: Vec<_> = sets.iter().flat_map(|s| s.rays.iter().copied()).collect();
         let dest = out.dest().display().to_string();

@@ -17,7 +17,7 @@
 
 use crate::accel::{self, AccelConfig, AccelKind};
 use crate::scene::View;
-use crate::shade::{cosine_direction, mix, mix_hit, spawn};
+use crate::shade::{cosine_direction, mix, spawn};
 use accel_core::scenes::SplitMix64;
 use accel_core::spawn::SpawnOffset;
 use accel_core::{
@@ -26,6 +26,15 @@ use accel_core::{
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::{Duration, Instant};
+
+/// `primary 262144, shadow 73891, …`: each set's kind and size.
+#[must_use]
+pub fn describe_sets<T>(sets: &[RaySet<T>]) -> String {
+    sets.iter()
+        .map(|s| format!("{} {}", s.kind.name(), s.rays.len()))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Brute force joins the default list only below this many ray–triangle
 /// tests per pass over all sets.
@@ -179,6 +188,52 @@ pub struct Answers {
     pub digest: u64,
 }
 
+impl Answers {
+    /// The answers of an any-hit set from each ray's "blocked" flag, in ray
+    /// order.
+    #[must_use]
+    pub fn of_occluded(blocked: impl IntoIterator<Item = bool>) -> Self {
+        let mut hits = 0u64;
+        let mut digest = 0u64;
+        for b in blocked {
+            hits += u64::from(b);
+            digest = mix(digest, u64::from(b));
+        }
+        Self {
+            hits,
+            t_sum: None,
+            digest,
+        }
+    }
+
+    /// The answers of a nearest-hit set from each ray's hit, in ray order:
+    /// its `t` and the words to digest (a miss is `None`). With the words of
+    /// [`accel_core::Hit::bit_key`] the digest is [`crate::shade::mix_hit`]'s.
+    #[must_use]
+    pub fn of_nearest<const N: usize>(
+        hits: impl IntoIterator<Item = Option<(f64, [u64; N])>>,
+    ) -> Self {
+        let mut count = 0u64;
+        let mut t_sum = 0.0f64;
+        let mut digest = 0u64;
+        for h in hits {
+            match h {
+                None => digest = mix(digest, u64::MAX),
+                Some((t, words)) => {
+                    count += 1;
+                    t_sum += t;
+                    digest = words.into_iter().fold(digest, mix);
+                }
+            }
+        }
+        Self {
+            hits: count,
+            t_sum: Some(t_sum),
+            digest,
+        }
+    }
+}
+
 #[allow(clippy::trivially_copy_pass_by_ref)] // serde's signature
 fn hex<S: serde::Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(&format!("{v:016x}"))
@@ -308,22 +363,51 @@ pub(crate) fn count_hits<T: Real>(
     }
 }
 
-/// Repeats `pass` until `min_time` has passed (at least once); returns the
-/// time per pass.
-fn time_passes(
+/// Repeats `pass` until `min_time` has passed and at least `min_passes`
+/// passes ran (at least one); returns the time of each pass.
+///
+/// # Errors
+/// The first error of a pass.
+pub fn pass_times<E>(
     min_time: Duration,
-    mut pass: impl FnMut() -> Result<(), QueryError>,
-) -> Result<Duration, QueryError> {
+    min_passes: usize,
+    mut pass: impl FnMut() -> Result<(), E>,
+) -> Result<Vec<Duration>, E> {
     let start = Instant::now();
-    let mut passes = 0u32;
+    let mut times = Vec::new();
     loop {
+        let t0 = Instant::now();
         pass()?;
-        passes += 1;
-        let elapsed = start.elapsed();
-        if elapsed >= min_time {
-            return Ok(elapsed / passes);
+        times.push(t0.elapsed());
+        if times.len() >= min_passes.max(1) && start.elapsed() >= min_time {
+            return Ok(times);
         }
     }
+}
+
+/// The median of `times` (the mean of the middle two for an even count;
+/// zero for none).
+#[must_use]
+pub fn median(times: &[Duration]) -> Duration {
+    let mut sorted = times.to_vec();
+    sorted.sort_unstable();
+    let n = sorted.len();
+    match n {
+        0 => Duration::ZERO,
+        _ if n % 2 == 1 => sorted[n / 2],
+        _ => (sorted[n / 2 - 1] + sorted[n / 2]) / 2,
+    }
+}
+
+/// Repeats `pass` until `min_time` has passed (at least once); returns the
+/// mean time per pass.
+fn time_passes(
+    min_time: Duration,
+    pass: impl FnMut() -> Result<(), QueryError>,
+) -> Result<Duration, QueryError> {
+    let times = pass_times(min_time, 1, pass)?;
+    let total: Duration = times.iter().sum();
+    Ok(total / u32::try_from(times.len()).unwrap_or(u32::MAX))
 }
 
 /// Why a set could not be measured.
@@ -354,7 +438,9 @@ pub enum MeasureError {
     },
 }
 
-fn rays_per_second(rays: usize, per_pass: Duration) -> f64 {
+/// Millions of rays per second for `rays` rays traced in `per_pass`.
+#[must_use]
+pub fn rays_per_second(rays: usize, per_pass: Duration) -> f64 {
     let s = per_pass.as_secs_f64();
     if s > 0.0 {
         rays as f64 / s / 1e6
@@ -389,21 +475,21 @@ pub fn measure_set<T: Real>(
         })
         .collect::<Result<_, _>>()?;
     let mut work = TraversalCounters::default();
-    let mut hits = 0u64;
-    let mut t_sum = 0.0f64;
-    let mut digest = 0u64;
-    for (hit, any, c) in &answers {
+    for (_, _, c) in &answers {
         work.add(c);
-        hits += u64::from(*any);
-        if any_hit {
-            digest = mix(digest, u64::from(*any));
-        } else {
-            digest = mix_hit(digest, hit.as_ref());
-            if let Some(h) = hit {
-                t_sum += h.t.to_f64();
-            }
-        }
     }
+    let summary = if any_hit {
+        Answers::of_occluded(answers.iter().map(|a| a.1))
+    } else {
+        // The digest covers every bit of each hit: t, primitive, u and v.
+        Answers::of_nearest(answers.iter().map(|a| {
+            a.0.map(|h| {
+                let (t, prim, u, v) = h.bit_key();
+                (h.t.to_f64(), [t, u64::from(prim), u, v])
+            })
+        }))
+    };
+    let hits = summary.hits;
     let n = set.rays.len().max(1) as f64;
     let query_error = |source| MeasureError::Query {
         kind,
@@ -439,11 +525,7 @@ pub fn measure_set<T: Real>(
         kind: set.kind,
         query: if any_hit { "occluded" } else { "intersect" },
         rays: set.rays.len() as u64,
-        answers: Answers {
-            hits,
-            t_sum: (!any_hit).then_some(t_sum),
-            digest,
-        },
+        answers: summary,
         nodes_per_ray: work.nodes as f64 / n,
         tests_per_ray: work.prims as f64 / n,
         mrays_one_thread: rays_per_second(set.rays.len(), one),

@@ -60,7 +60,8 @@ Examples:
   render bench scene.glb --rays rays.bin --accel grid,brute
   render tradeoff all --csv docs/tradeoff.csv --plot docs/tradeoff.png
   render sweep-density all --plot docs/sweep-density.png
-  render choose-bench all";
+  render choose-bench all
+  render peers terrain_1m                  (peers: cargo run --release -p render --features peers,embree)";
 
 /// Subcommands.
 #[derive(Debug, Subcommand)]
@@ -75,6 +76,10 @@ pub enum Command {
     /// Run every accelerator on every scene and compare `--accel auto`'s
     /// choice with the best (total time: build + rays).
     ChooseBench(crate::choose_bench::ChooseBenchArgs),
+    /// Run our accelerators and the peers (obvhs, parry3d, bvh with
+    /// `--features peers`; Embree 3 with `--features embree`) on the same
+    /// scene and rays on one thread: Mrays/s, ratios, build times, agreement.
+    Peers(crate::peers::run::PeersArgs),
 }
 
 /// Floating-point precision of the geometry, rays and queries.
@@ -420,7 +425,11 @@ pub fn threads_parser() -> clap::builder::RangedU64ValueParser<usize> {
     clap::builder::RangedU64ValueParser::<usize>::new().range(1..=limits::MAX_THREADS as u64)
 }
 
-fn min_time_parser(s: &str) -> Result<f64, String> {
+/// Parses a duration in seconds, 0 to 3600.
+///
+/// # Errors
+/// A message naming the value.
+pub fn min_time_parser(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
     if (0.0..=3600.0).contains(&v) {
         Ok(v)

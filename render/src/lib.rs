@@ -11,7 +11,7 @@
 //!   ([`tiles`]) with a progress bar.
 //! - `--heatmap` also writes the traversal cost per pixel ([`heatmap`]).
 //! - `render bench SCENE` measures build time, bytes and Mrays/s per
-//!   accelerator and ray kind ([`bench`]), and reads or writes the binary
+//!   accelerator and ray kind ([`mod@bench`]), and reads or writes the binary
 //!   ray file of DESIGN.md ([`rayfile`]).
 //!
 //! - `render tradeoff SCENE|all` measures every speed-against-accuracy dial
@@ -21,6 +21,10 @@
 //! - `render sweep-density` sweeps the grid density ([`sweep`]);
 //!   `render choose-bench` checks `--accel auto` ([`choose`]) against the
 //!   best accelerator per scene ([`choose_bench`]).
+//! - `render peers SCENE` runs our accelerators and other libraries (obvhs,
+//!   parry3d, the bvh crate, Embree 3; each behind a cargo feature) on the
+//!   same scene and rays on one thread, and checks that they agree
+//!   ([`peers`]).
 //!
 //! Bad input is refused with a one-line error and a non-zero exit; output
 //! files are written whole or not at all ([`output`]). Every accelerator is
@@ -36,6 +40,7 @@ pub mod cli;
 pub mod font;
 pub mod heatmap;
 pub mod output;
+pub mod peers;
 pub mod plot;
 pub mod rayfile;
 pub mod scene;

@@ -32,6 +32,7 @@ fn main() -> ExitCode {
         Some(Command::Tradeoff(args)) => render::tradeoff::run(args),
         Some(Command::SweepDensity(args)) => render::sweep::run(args),
         Some(Command::ChooseBench(args)) => render::choose_bench::run(args),
+        Some(Command::Peers(args)) => render::peers::run::run(args),
         None => render::app::run_render(&cli.render),
     };
     match result {

@@ -81,6 +81,22 @@ pub enum RayFileError {
     },
 }
 
+/// A ray's eight numbers in the file's order: origin, direction, `t_min`,
+/// `t_max`.
+#[must_use]
+pub fn ray_values<T: Real>(r: &Ray<T>) -> [T; 8] {
+    [
+        r.origin.x,
+        r.origin.y,
+        r.origin.z,
+        r.direction.x,
+        r.direction.y,
+        r.direction.z,
+        r.t_min,
+        r.t_max,
+    ]
+}
+
 /// Encodes rays (rounded to `f32`) in the file format.
 #[must_use]
 pub fn encode<T: Real>(rays: &[Ray<T>]) -> Vec<u8> {
@@ -89,17 +105,7 @@ pub fn encode<T: Real>(rays: &[Ray<T>]) -> Vec<u8> {
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.extend_from_slice(&(rays.len() as u64).to_le_bytes());
     for r in rays {
-        let values = [
-            r.origin.x,
-            r.origin.y,
-            r.origin.z,
-            r.direction.x,
-            r.direction.y,
-            r.direction.z,
-            r.t_min,
-            r.t_max,
-        ];
-        for v in values {
+        for v in ray_values(r) {
             out.extend_from_slice(&(v.to_f64() as f32).to_le_bytes());
         }
     }

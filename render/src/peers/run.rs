@@ -1,0 +1,593 @@
+//! `render peers SCENE`: our accelerators and the peers on identical scenes
+//! and rays, in one process, on one thread.
+//!
+//! Every structure is built on one thread (ours in a one-thread rayon pool,
+//! Embree with `threads=1`, the Rust peers without their parallel
+//! features); build times are wall-clock. The rays are [`mod@crate::bench`]'s
+//! (primary, shadow, diffuse, generated from the scene's view through our
+//! kD-tree) or a binary ray file's. Each tool traces each set once to record
+//! every answer, then repeats passes for at least `--min-time` seconds and
+//! [`MIN_PASSES`] passes; the figure is the median pass. Nearest hit for
+//! primary, diffuse and file rays, any hit for shadow rays.
+//!
+//! A tool whose pass would take longer than `--max-pass-time` (estimated
+//! from a sample of the set) is skipped on that set, with a note. Every
+//! tool's answers are compared ray by ray with those of the first of ours
+//! measured on the set (the grid unless skipped; ours equal brute force bit
+//! for bit): hit against miss, other triangle, `t` differing by more than
+//! [`T_TOLERANCE`] relative. Differences are printed, never fatal: the
+//! peers' triangle tests are not watertight, and each test rounds `t`
+//! its own way.
+
+use super::{Agreement, EMBREE, PeerHit, PeerKind, PeerMesh, SetAnswers, T_TOLERANCE, compare};
+use crate::accel::{self, AccelConfig, AccelKind};
+use crate::app::{load_scene, mesh_in};
+use crate::bench::{self, Answers, RayKind, RaySet};
+use crate::cli::{min_time_parser, side_parser};
+use crate::output::PendingFile;
+use crate::rayfile;
+use accel_core::{Accelerator, Ray};
+use anyhow::{Context, Result, anyhow};
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// The fewest timed passes per figure.
+pub const MIN_PASSES: usize = 3;
+
+/// Differing rays printed per tool and set.
+const EXAMPLES: usize = 3;
+
+/// Rays of the sample that estimates a pass's time.
+const PROBE_RAYS: usize = 1000;
+
+/// Options of `render peers [SCENE]`.
+#[derive(Clone, Debug, Args)]
+pub struct PeersArgs {
+    /// A .gltf/.glb file or a built-in scene name.
+    #[arg(value_name = "SCENE", default_value = "default")]
+    pub scene: String,
+    /// Trace the rays of this binary ray file (nearest hit) instead of
+    /// generated ones.
+    #[arg(long, value_name = "FILE")]
+    pub rays: Option<PathBuf>,
+    /// Generated ray kinds to trace, comma-separated.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "primary,shadow,diffuse"
+    )]
+    pub kinds: Vec<KindChoice>,
+    /// Width of the primary-ray image.
+    #[arg(long, default_value_t = 512, value_parser = side_parser(), allow_negative_numbers = true)]
+    pub width: u32,
+    /// Height of the primary-ray image.
+    #[arg(long, default_value_t = 512, value_parser = side_parser(), allow_negative_numbers = true)]
+    pub height: u32,
+    /// Minimum seconds of timed passes per figure (at least 3 passes; the
+    /// median pass is reported).
+    #[arg(long, default_value_t = 1.0, value_parser = min_time_parser, allow_negative_numbers = true)]
+    pub min_time: f64,
+    /// Skip a tool on a ray set when one pass would take longer than this
+    /// many seconds, estimated from a sample of 1000 rays (the grid on
+    /// teapot_in_stadium tests every triangle of the teapot per ray).
+    #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = min_time_parser, allow_negative_numbers = true)]
+    pub max_pass_time: f64,
+    /// Write the results as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+/// A generated ray kind, as `--kinds` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum KindChoice {
+    /// Camera rays (nearest hit).
+    Primary,
+    /// Hit point to light (any hit).
+    Shadow,
+    /// Cosine-distributed from hit points (nearest hit).
+    Diffuse,
+}
+
+impl KindChoice {
+    const fn kind(self) -> RayKind {
+        match self {
+            Self::Primary => RayKind::Primary,
+            Self::Shadow => RayKind::Shadow,
+            Self::Diffuse => RayKind::Diffuse,
+        }
+    }
+}
+
+/// One tool's build.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BuildFigure {
+    /// Tool.
+    pub name: String,
+    /// Ours or a peer.
+    pub ours: bool,
+    /// Wall-clock build time on one thread, milliseconds.
+    pub build_ms: f64,
+    /// Millions of triangles built per second.
+    pub mtris_per_s: f64,
+}
+
+/// One tool on one ray set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SetFigure {
+    /// Tool.
+    pub name: String,
+    /// Ray kind.
+    pub kind: RayKind,
+    /// Millions of rays per second, one thread, median pass.
+    pub mrays: f64,
+    /// Timed passes.
+    pub passes: usize,
+    /// Hits, `t` sum and digest of `(t, triangle)`.
+    #[serde(flatten)]
+    pub answers: Answers,
+    /// The tool compared with: the first of ours measured on the set
+    /// (the grid unless it was skipped).
+    pub reference: String,
+    /// Differences from the reference.
+    pub agreement: Agreement,
+}
+
+/// A peer that is not compiled in.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unavailable {
+    /// Peer.
+    pub name: &'static str,
+    /// The cargo feature that enables it.
+    pub feature: &'static str,
+}
+
+/// The whole comparison, as printed and written to JSON.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PeersReport {
+    /// Scene name or file.
+    pub scene: String,
+    /// Triangles.
+    pub triangles: u64,
+    /// Where the rays came from.
+    pub ray_source: String,
+    /// Rays per set.
+    pub ray_sets: Vec<(RayKind, u64)>,
+    /// Minimum timing per figure, seconds.
+    pub min_time_s: f64,
+
+    /// Relative `t` tolerance of the agreement checks.
+    pub t_tolerance: f64,
+    /// Builds, ours first.
+    pub builds: Vec<BuildFigure>,
+    /// Throughput and agreement per tool and set.
+    pub sets: Vec<SetFigure>,
+    /// Peers not compiled in.
+    pub unavailable: Vec<Unavailable>,
+    /// Peers compiled in that failed to build, with the reason.
+    pub failed: Vec<(String, String)>,
+    /// Tools skipped on a set as too slow: tool, set, estimated seconds per pass.
+    pub skipped: Vec<(String, RayKind, f64)>,
+}
+
+/// A tool under test.
+enum Tool<'a> {
+    Ours(AccelKind, Box<dyn Accelerator<f32> + 'a>),
+    Peer(&'static str, Box<dyn super::Tracer>),
+}
+
+impl Tool<'_> {
+    fn name(&self) -> &'static str {
+        match self {
+            Tool::Ours(k, _) => k.name(),
+            Tool::Peer(n, _) => n,
+        }
+    }
+
+    /// Every answer to `set`.
+    fn answers(&self, set: &RaySet<f32>) -> Result<SetAnswers> {
+        let any = set.kind.any_hit();
+        Ok(match self {
+            Tool::Ours(k, a) => {
+                let err =
+                    |i: usize| move |e| anyhow!("{k} refused {} ray {i}: {e}", set.kind.name());
+                if any {
+                    SetAnswers::Occluded(
+                        set.rays
+                            .iter()
+                            .enumerate()
+                            .map(|(i, r)| a.occluded(r).map_err(err(i)))
+                            .collect::<Result<_>>()?,
+                    )
+                } else {
+                    SetAnswers::Nearest(
+                        set.rays
+                            .iter()
+                            .enumerate()
+                            .map(|(i, r)| {
+                                a.intersect(r)
+                                    .map(|h| {
+                                        h.map(|h| PeerHit {
+                                            t: h.t,
+                                            prim: h.prim,
+                                        })
+                                    })
+                                    .map_err(err(i))
+                            })
+                            .collect::<Result<_>>()?,
+                    )
+                }
+            }
+            Tool::Peer(_, p) => {
+                if any {
+                    SetAnswers::Occluded(set.rays.iter().map(|r| p.occluded(r)).collect())
+                } else {
+                    SetAnswers::Nearest(set.rays.iter().map(|r| p.nearest(r)).collect())
+                }
+            }
+        })
+    }
+
+    /// One timed pass over `rays`: the hits.
+    fn pass(&self, any: bool, rays: &[Ray<f32>]) -> Result<u64> {
+        Ok(match self {
+            Tool::Ours(_, a) => bench::count_hits(a.as_ref(), any, rays, false)?,
+            Tool::Peer(_, p) => {
+                let p = p.as_ref();
+                if any {
+                    rays.iter().map(|r| u64::from(p.occluded(r))).sum()
+                } else {
+                    rays.iter().map(|r| u64::from(p.nearest(r).is_some())).sum()
+                }
+            }
+        })
+    }
+}
+
+/// `render peers [SCENE]`.
+///
+/// # Errors
+/// A refused argument, scene, ray file or output file, or a ray our
+/// accelerators refuse. Disagreements are printed, not errors.
+pub fn run(args: &PeersArgs) -> Result<()> {
+    let json_out = args.json.as_deref().map(PendingFile::create).transpose()?;
+    let file_rays = args.rays.as_deref().map(rayfile::read).transpose()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .context("cannot start the one-thread pool")?;
+    let report = pool.install(|| measure(args, file_rays))?;
+    if let Some(out) = json_out {
+        let json = serde_json::to_vec_pretty(&report).context("encoding the JSON report")?;
+        let dest = out.dest().display().to_string();
+        out.write_all(&json)?;
+        println!("wrote {dest}");
+    }
+    Ok(())
+}
+
+fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersReport> {
+    let scene = load_scene(&args.scene)?;
+    let mesh = mesh_in::<f32>(&scene)?;
+    let n = mesh.triangle_count();
+    let mut builds = Vec::new();
+    let mut record_build = |name: &str, ours: bool, d: Duration| {
+        let s = d.as_secs_f64();
+        builds.push(BuildFigure {
+            name: name.to_owned(),
+            ours,
+            build_ms: s * 1e3,
+            mtris_per_s: if s > 0.0 {
+                n as f64 / s / 1e6
+            } else {
+                f64::INFINITY
+            },
+        });
+    };
+    let mut tools = Vec::new();
+    for kind in [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree] {
+        let start = Instant::now();
+        let accel = accel::build_config(&AccelConfig::default_for(kind), &mesh)?;
+        record_build(kind.name(), true, start.elapsed());
+        tools.push(Tool::Ours(kind, accel));
+    }
+    let (sets, source) = match file_rays {
+        Some(rays) => (
+            vec![RaySet {
+                kind: RayKind::File,
+                rays,
+            }],
+            args.rays
+                .as_deref()
+                .map_or_else(String::new, |p| p.display().to_string()),
+        ),
+        None => {
+            // Any of ours gives the same primary hits; the kD-tree is never
+            // slow (the grid is, on teapot_in_stadium).
+            let Tool::Ours(_, kdtree) = &tools[2] else {
+                unreachable!("ours are built first")
+            };
+            let wanted: Vec<RayKind> = args.kinds.iter().map(|k| k.kind()).collect();
+            let sets =
+                bench::generate_rays(kdtree.as_ref(), &mesh, &scene.view, args.width, args.height)
+                    .context("generating rays")?
+                    .into_iter()
+                    .filter(|s| wanted.contains(&s.kind))
+                    .collect();
+            (
+                sets,
+                format!("generated from a {}x{} view", args.width, args.height),
+            )
+        }
+    };
+    println!("rays ({source}): {}", bench::describe_sets(&sets));
+    let peer_mesh = PeerMesh::new(&mesh);
+    let mut unavailable = Vec::new();
+    let mut failed = Vec::new();
+    for PeerKind {
+        name,
+        feature,
+        build,
+        ..
+    } in super::peer_kinds()
+    {
+        let Some(build) = build else {
+            unavailable.push(Unavailable { name, feature });
+            continue;
+        };
+        match build(&peer_mesh) {
+            Ok(built) => {
+                record_build(name, false, built.build);
+                tools.push(Tool::Peer(name, built.tracer));
+            }
+            Err(why) => {
+                println!("{name}: not measured: {why}");
+                failed.push((name.to_owned(), why));
+            }
+        }
+    }
+    print_unavailable(&unavailable);
+    let min_time = Duration::from_secs_f64(args.min_time);
+    let max_pass = Duration::from_secs_f64(args.max_pass_time);
+    let mut figures = Vec::new();
+    let mut skipped = Vec::new();
+    for set in &sets {
+        let any = set.kind.any_hit();
+        let mut reference: Option<(SetAnswers, &str)> = None;
+        let stride = set.rays.len().div_ceil(PROBE_RAYS).max(1);
+        let sample: Vec<Ray<f32>> = set.rays.iter().step_by(stride).copied().collect();
+        for tool in &tools {
+            let start = Instant::now();
+            tool.pass(any, &sample)?;
+            let estimate =
+                start.elapsed().as_secs_f64() * set.rays.len() as f64 / sample.len().max(1) as f64;
+            if estimate > max_pass.as_secs_f64() {
+                println!(
+                    "{}: skipped on {} rays: about {estimate:.0} s per pass (over --max-pass-time {})",
+                    tool.name(),
+                    set.kind.name(),
+                    args.max_pass_time
+                );
+                skipped.push((tool.name().to_owned(), set.kind, estimate));
+                continue;
+            }
+            let answers = tool.answers(set)?;
+            let summary = answers.summary();
+            let mut timed = 0;
+            let times = bench::pass_times(min_time, MIN_PASSES, || -> Result<()> {
+                timed = black_box(tool.pass(any, black_box(&set.rays))?);
+                Ok(())
+            })?;
+            if timed != summary.hits {
+                println!(
+                    "warning: {} gave {} hits on {} rays when recording answers but {timed} when timed",
+                    tool.name(),
+                    summary.hits,
+                    set.kind.name()
+                );
+            }
+            let (reference, ref_name) =
+                reference.get_or_insert_with(|| (answers.clone(), tool.name()));
+            let agreement = compare(
+                reference,
+                ref_name,
+                &answers,
+                tool.name(),
+                &set.rays,
+                EXAMPLES,
+            );
+            figures.push(SetFigure {
+                name: tool.name().to_owned(),
+                kind: set.kind,
+                mrays: bench::rays_per_second(set.rays.len(), bench::median(&times)),
+                passes: times.len(),
+                answers: summary,
+                reference: (*ref_name).to_owned(),
+                agreement,
+            });
+        }
+    }
+    let report = PeersReport {
+        scene: scene.name.clone(),
+        triangles: n as u64,
+        ray_source: source,
+        ray_sets: sets.iter().map(|s| (s.kind, s.rays.len() as u64)).collect(),
+        min_time_s: args.min_time,
+
+        t_tolerance: T_TOLERANCE,
+        builds,
+        sets: figures,
+        unavailable,
+        failed,
+        skipped,
+    };
+    for line in report_lines(&report) {
+        println!("{line}");
+    }
+    Ok(report)
+}
+
+fn print_unavailable(unavailable: &[Unavailable]) {
+    for feature in ["peers", "embree"] {
+        let names: Vec<_> = unavailable
+            .iter()
+            .filter(|u| u.feature == feature)
+            .map(|u| u.name)
+            .collect();
+        if !names.is_empty() {
+            let extra = if feature == "embree" {
+                " (needs the system library: apt-get install libembree-dev)"
+            } else {
+                ""
+            };
+            println!(
+                "not built in: {} (build render with --features {feature}{extra})",
+                names.join(", ")
+            );
+        }
+    }
+}
+
+/// The kinds measured, in order.
+fn kinds_of(report: &PeersReport) -> Vec<RayKind> {
+    report.ray_sets.iter().map(|(k, _)| *k).collect()
+}
+
+/// The figure of `name` on `kind`.
+fn figure<'r>(report: &'r PeersReport, name: &str, kind: RayKind) -> Option<&'r SetFigure> {
+    report
+        .sets
+        .iter()
+        .find(|f| f.name == name && f.kind == kind)
+}
+
+/// The report as printed: builds, throughput, ratios, agreement.
+#[must_use]
+pub fn report_lines(report: &PeersReport) -> Vec<String> {
+    let kinds = kinds_of(report);
+    let mut out = Vec::new();
+    out.push(format!(
+        "scene {}: {} triangles; one thread; Mrays/s of the median pass (>= {MIN_PASSES} passes, >= {} s)",
+        report.scene, report.triangles, report.min_time_s
+    ));
+    out.push(String::new());
+    out.push(format!("{:<14} {:>10} {:>9}", "build", "ms", "Mtris/s"));
+    for b in &report.builds {
+        out.push(format!(
+            "{:<14} {:>10.1} {:>9.2}",
+            b.name, b.build_ms, b.mtris_per_s
+        ));
+    }
+    out.push(String::new());
+    let mut header = format!("{:<14}", "Mrays/s");
+    for k in &kinds {
+        header.push_str(&format!(" {:>9}", k.name()));
+    }
+    out.push(header);
+    for b in &report.builds {
+        let mut line = format!("{:<14}", b.name);
+        for &k in &kinds {
+            let v = figure(report, &b.name, k)
+                .map_or("skipped".to_owned(), |f| format!("{:.2}", f.mrays));
+            line.push_str(&format!(" {v:>9}"));
+        }
+        out.push(line);
+    }
+    // Ratios of ours to the best Rust peer and to Embree, per kind.
+    let rust_peers: Vec<&str> = super::peer_kinds()
+        .iter()
+        .filter(|k| k.rust)
+        .map(|k| k.name)
+        .collect();
+    let best_rust = |k: RayKind| {
+        report
+            .sets
+            .iter()
+            .filter(|f| f.kind == k && rust_peers.contains(&f.name.as_str()))
+            .max_by(|a, b| a.mrays.total_cmp(&b.mrays))
+    };
+    let has_rust = kinds.iter().any(|&k| best_rust(k).is_some());
+    let has_embree = kinds.iter().any(|&k| figure(report, EMBREE, k).is_some());
+    if has_rust || has_embree {
+        out.push(String::new());
+        out.push("ours / peer (> 1: ours faster)".to_owned());
+        let mut header = format!("{:<14}", "");
+        for k in &kinds {
+            if has_rust {
+                header.push_str(&format!(" {:>21}", format!("{} / best Rust", k.name())));
+            }
+            if has_embree {
+                header.push_str(&format!(" {:>17}", format!("{} / Embree", k.name())));
+            }
+        }
+        out.push(header);
+        for b in report.builds.iter().filter(|b| b.ours) {
+            let mut line = format!("{:<14}", b.name);
+            for &k in &kinds {
+                let ours = figure(report, &b.name, k).map(|f| f.mrays);
+                if has_rust {
+                    let cell = match (ours, best_rust(k)) {
+                        (Some(o), Some(p)) => format!("{:.2} ({})", o / p.mrays, p.name),
+                        _ => "-".to_owned(),
+                    };
+                    line.push_str(&format!(" {cell:>21}"));
+                }
+                if has_embree {
+                    let cell = match (ours, figure(report, EMBREE, k)) {
+                        (Some(o), Some(e)) => format!("{:.2}", o / e.mrays),
+                        _ => "-".to_owned(),
+                    };
+                    line.push_str(&format!(" {cell:>17}"));
+                }
+            }
+            out.push(line);
+        }
+    }
+    out.push(String::new());
+    out.push(format!(
+        "agreement with the reference (rays differing: hit/miss, triangle, t by > {:e} relative)",
+        report.t_tolerance
+    ));
+    out.push(format!(
+        "{:<14} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
+        "tool", "rays", "count", "hits", "t sum", "hit/miss", "triangle", "t", "reference"
+    ));
+    let mut examples = Vec::new();
+    for &k in &kinds {
+        for f in report.sets.iter().filter(|f| f.kind == k) {
+            let a = &f.agreement;
+            out.push(format!(
+                "{:<14} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
+                f.name,
+                k.name(),
+                a.rays,
+                f.answers.hits,
+                f.answers
+                    .t_sum
+                    .map_or("-".to_owned(), |t| format!("{t:.9e}")),
+                a.hit_miss,
+                a.prim,
+                a.t,
+                f.reference
+            ));
+            examples.extend(
+                a.examples
+                    .iter()
+                    .map(|e| format!("  {} {}: {e}", f.name, k.name())),
+            );
+        }
+    }
+    let disagreeing = report.sets.iter().filter(|f| !f.agreement.agrees()).count();
+    if disagreeing == 0 {
+        out.push("every tool agrees on every ray".to_owned());
+    } else {
+        out.push(format!(
+            "{disagreeing} tool/set pairs differ from the reference; first differing rays:"
+        ));
+        out.extend(examples);
+    }
+    out
+}

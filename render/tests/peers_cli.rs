@@ -1,0 +1,82 @@
+//! End-to-end runs of `render peers`: our accelerators always, the peers
+//! when their features are enabled, the table, the JSON report, ray files.
+
+mod common;
+
+use common::{run, stdout};
+use serde_json::Value;
+
+const FAST: [&str; 6] = ["--width", "12", "--height", "8", "--min-time", "0"];
+
+#[test]
+fn peers_runs_our_accelerators_and_names_the_missing_peers() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec!["peers", "default", "--json", "p.json"];
+    args.extend(FAST);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = stdout(&o);
+    for name in ["grid", "octree", "kdtree"] {
+        assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
+    }
+    if !cfg!(feature = "peers") {
+        assert!(
+            text.contains("not built in: obvhs, parry3d, bvh (build render with --features peers)"),
+            "{text}"
+        );
+    }
+    if !cfg!(feature = "embree") {
+        assert!(text.contains("--features embree"), "{text}");
+    }
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("p.json")).unwrap()).unwrap();
+    assert_eq!(report["scene"], "default");
+    let sets = report["sets"].as_array().unwrap();
+    assert!(sets.iter().all(|s| s["reference"] == "grid"), "{report}");
+    // Ours agree with each other exactly, on every set.
+    for s in sets
+        .iter()
+        .filter(|s| ["grid", "octree", "kdtree"].contains(&s["name"].as_str().unwrap()))
+    {
+        assert_eq!(s["agreement"]["hit_miss"], 0, "{s}");
+        assert_eq!(s["agreement"]["prim"], 0, "{s}");
+        assert_eq!(s["agreement"]["t"], 0, "{s}");
+        assert!(s["mrays"].as_f64().unwrap() > 0.0, "{s}");
+    }
+    let kinds: Vec<_> = report["ray_sets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k[0].as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(kinds, ["primary", "shadow", "diffuse"]);
+}
+
+#[test]
+fn peers_traces_a_ray_file_and_chosen_kinds() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "bench",
+        "default",
+        "--write-rays",
+        "r.rays",
+        "--accel",
+        "grid",
+    ];
+    args.extend(FAST);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let mut args = vec!["peers", "default", "--rays", "r.rays"];
+    args.extend(FAST);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("rays (r.rays): file "), "{text}");
+    let mut args = vec!["peers", "default", "--kinds", "shadow"];
+    args.extend(FAST);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains(": shadow "), "{text}");
+    assert!(!text.contains("primary"), "{text}");
+}
