@@ -56,6 +56,9 @@ pub const PROBE_SHARE: f64 = 0.6;
 /// Below this many expected rays per primitive, the kD-tree is built with
 /// [`KdTreeParams::fast_build`].
 pub const FAST_BUILD_RAYS: f64 = 20.0;
+/// Most time spent timing one candidate's probe rays (the estimate then
+/// comes from the part of the probe traced so far).
+pub const PROBE_TIME: Duration = Duration::from_millis(150);
 /// Most probe rays timed per candidate.
 pub const MAX_PROBE: usize = 4096;
 /// The grid densities the chooser considers, coarsest (cheapest) first:
@@ -164,7 +167,7 @@ where
     let (grid, grid_build) = timed_build(&grid_config, prims)?;
     let mut probe_rays = probe(grid.as_ref())?;
     thin(&mut probe_rays, MAX_PROBE);
-    let grid_per_ray = per_ray(grid.as_ref(), &probe_rays)?;
+    let grid_per_ray = probe_per_ray(grid.as_ref(), &probe_rays, PROBE_TIME)?;
     let mut estimates = vec![measured(grid_config, grid_build, grid_per_ray, rays)];
     let mut best: (usize, Box<dyn Accelerator<T> + 'a>) = (0, grid);
 
@@ -203,7 +206,7 @@ where
             continue;
         }
         let (accel, build) = timed_build(&config, prims)?;
-        let t = per_ray(accel.as_ref(), &probe_rays)?;
+        let t = probe_per_ray(accel.as_ref(), &probe_rays, PROBE_TIME)?;
         estimates.push(measured(config, build, t, rays));
         if estimates[estimates.len() - 1].total_s < best_total {
             best = (estimates.len() - 1, accel);
@@ -278,6 +281,57 @@ fn thin<T: Copy>(rays: &mut Vec<T>, max: usize) {
     }
 }
 
+/// Seconds per probe ray for the chooser: [`per_ray`] when the probe is
+/// quick, otherwise estimated from interleaved slices of the probe (every
+/// 16th ray, then the next 16th, …) traced until `budget` is spent, so a
+/// structure that serves the scene badly (the uniform grid on a teapot in a
+/// stadium: a millisecond or more per ray) cannot make the choice itself
+/// slow.
+///
+/// # Errors
+/// A probe ray the accelerator refuses.
+pub fn probe_per_ray<T: Real>(
+    accel: &dyn Accelerator<T>,
+    rays: &[ProbeRay<T>],
+    budget: Duration,
+) -> Result<f64, QueryError> {
+    const SLICES: usize = 16;
+    let (mut traced, mut spent) = (0usize, 0.0f64);
+    for first in 0..SLICES.min(rays.len()) {
+        let slice: Vec<&ProbeRay<T>> = rays.iter().skip(first).step_by(SLICES).collect();
+        spent += trace_seconds(accel, slice.into_iter())?;
+        traced += rays.len().saturating_sub(first).div_ceil(SLICES);
+        if spent > budget.as_secs_f64() {
+            return Ok(spent / traced.max(1) as f64);
+        }
+    }
+    // The whole probe was quick: time it again, warm, as `per_ray` does.
+    let warm = trace_seconds(accel, rays.iter())?;
+    Ok(spent.min(warm) / rays.len().max(1) as f64)
+}
+
+/// Wall-clock seconds to trace `rays` in parallel, as a render would.
+fn trace_seconds<'r, T: Real>(
+    accel: &dyn Accelerator<T>,
+    rays: impl Iterator<Item = &'r ProbeRay<T>>,
+) -> Result<f64, QueryError> {
+    let rays: Vec<&ProbeRay<T>> = rays.collect();
+    let start = Instant::now();
+    let hits: u64 = rays
+        .par_iter()
+        .with_min_len(32)
+        .map(|p| {
+            Ok(u64::from(if p.any_hit {
+                accel.occluded(&p.ray)?
+            } else {
+                accel.intersect(&p.ray)?.is_some()
+            }))
+        })
+        .try_reduce(|| 0, |a, b| Ok(a + b))?;
+    std::hint::black_box(hits);
+    Ok(start.elapsed().as_secs_f64())
+}
+
 /// Seconds per probe ray, traced in parallel as a render would (the faster
 /// of two passes: the first warms the caches).
 pub fn per_ray<T: Real>(
@@ -289,20 +343,7 @@ pub fn per_ray<T: Real>(
     }
     let mut best = f64::INFINITY;
     for _ in 0..2 {
-        let start = Instant::now();
-        let hits: u64 = rays
-            .par_iter()
-            .with_min_len(32)
-            .map(|p| {
-                Ok(u64::from(if p.any_hit {
-                    accel.occluded(&p.ray)?
-                } else {
-                    accel.intersect(&p.ray)?.is_some()
-                }))
-            })
-            .try_reduce(|| 0, |a, b| Ok(a + b))?;
-        std::hint::black_box(hits);
-        best = best.min(start.elapsed().as_secs_f64());
+        best = best.min(trace_seconds(accel, rays.iter())?);
     }
     Ok(best / rays.len() as f64)
 }
@@ -487,6 +528,74 @@ mod tests {
     use super::*;
     use accel_core::scenes::{random_rays, random_soup, uv_sphere};
     use accel_core::{BruteForce, TriangleMesh, Vec3};
+
+    /// Brute force that takes at least a millisecond per ray and counts them.
+    struct Slow<'a> {
+        inner: BruteForce<'a, f64, TriangleMesh<f64>>,
+        calls: std::sync::atomic::AtomicUsize,
+    }
+
+    impl Slow<'_> {
+        fn wait(&self) {
+            self.calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    impl Accelerator<f64> for Slow<'_> {
+        fn bounds(&self) -> Aabb<f64> {
+            self.inner.bounds()
+        }
+        fn intersect(&self, ray: &Ray<f64>) -> Result<Option<accel_core::Hit<f64>>, QueryError> {
+            self.wait();
+            self.inner.intersect(ray)
+        }
+        fn occluded(&self, ray: &Ray<f64>) -> Result<bool, QueryError> {
+            self.wait();
+            self.inner.occluded(ray)
+        }
+        fn intersect_counted(
+            &self,
+            ray: &Ray<f64>,
+            c: &mut accel_core::TraversalCounters,
+        ) -> Result<Option<accel_core::Hit<f64>>, QueryError> {
+            self.wait();
+            self.inner.intersect_counted(ray, c)
+        }
+        fn occluded_counted(
+            &self,
+            ray: &Ray<f64>,
+            c: &mut accel_core::TraversalCounters,
+        ) -> Result<bool, QueryError> {
+            self.wait();
+            self.inner.occluded_counted(ray, c)
+        }
+        fn query_region(&self, region: &Aabb<f64>) -> Result<Vec<u32>, QueryError> {
+            self.inner.query_region(region)
+        }
+        fn stats(&self) -> accel_core::AccelStats {
+            self.inner.stats()
+        }
+    }
+
+    #[test]
+    fn a_slow_structure_is_probed_on_a_slice_only() {
+        // 4096 probe rays at >= 1 ms each would take seconds; with a 10 ms
+        // budget the probe stops after its first slice (every 16th ray), and
+        // still prices the rays at >= 1 ms each (divided by the threads).
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 200);
+        let slow = Slow {
+            inner: BruteForce::new(&mesh).unwrap(),
+            calls: std::sync::atomic::AtomicUsize::new(0),
+        };
+        let rays: Vec<ProbeRay<f64>> = (0..16).flat_map(|_| probe_of(&mesh)).collect();
+        assert_eq!(rays.len(), 4096);
+        let t = probe_per_ray(&slow, &rays, Duration::from_millis(10)).unwrap();
+        assert_eq!(slow.calls.into_inner(), 4096 / 16);
+        let threads = rayon::current_num_threads() as f64;
+        assert!(t >= 1e-3 / threads, "{t} s per ray");
+    }
 
     fn probe_of(mesh: &TriangleMesh<f64>) -> Vec<ProbeRay<f64>> {
         random_rays(&mesh.bounds(), 256, 3)

@@ -27,7 +27,8 @@ use std::time::Instant;
 /// Options of `render choose-bench`.
 #[derive(Clone, Debug, Args)]
 pub struct ChooseBenchArgs {
-    /// A .gltf/.glb file, a built-in scene name, or `all`.
+    /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
+    /// them, or `all`.
     #[arg(value_name = "SCENE", default_value = "all")]
     pub scene: String,
     /// Write every candidate's estimate as CSV to this file.

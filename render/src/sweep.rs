@@ -27,7 +27,8 @@ use std::time::{Duration, Instant};
 /// Options of `render sweep-density`.
 #[derive(Clone, Debug, Args)]
 pub struct SweepArgs {
-    /// A .gltf/.glb file, a built-in scene name, or `all` (every scene but
+    /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
+    /// them, or `all` (every scene but
     /// `teapot_in_stadium`: its dense sphere fits in one grid cell at every
     /// density swept, so each point costs minutes and shows only that the
     /// uniform grid cannot serve it; name it to sweep it anyway).

@@ -48,7 +48,8 @@ use std::time::{Duration, Instant};
 /// Options of `render tradeoff`.
 #[derive(Clone, Debug, Args)]
 pub struct TradeoffArgs {
-    /// A .gltf/.glb file, a built-in scene name, or `all` (the default scene,
+    /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
+    /// them, or `all` (the default scene,
     /// the generated scenes and every file of ../shared/scenes).
     #[arg(value_name = "SCENE", default_value = "default")]
     pub scene: String,
@@ -81,11 +82,11 @@ pub struct TradeoffArgs {
     pub only: Vec<String>,
 }
 
-/// The scenes a SCENE argument names: one, or `all`.
+/// The scenes a SCENE argument names: one, a comma-separated list, or `all`.
 #[must_use]
 pub fn scene_list(arg: &str) -> Vec<String> {
     if arg != "all" {
-        return vec![arg.to_owned()];
+        return arg.split(',').map(str::to_owned).collect();
     }
     std::iter::once(crate::scene::DEFAULT_SCENE.to_owned())
         .chain(GeneratedScene::ALL.iter().map(|g| g.name().to_owned()))
@@ -572,6 +573,10 @@ mod tests {
     #[test]
     fn scene_lists_and_names() {
         assert_eq!(scene_list("teapot_in_stadium"), vec!["teapot_in_stadium"]);
+        assert_eq!(
+            scene_list("default,soup_100k"),
+            vec!["default", "soup_100k"]
+        );
         let all = scene_list("all");
         assert_eq!(all[0], "default");
         assert!(all.iter().any(|s| s == "terrain_1m"));
