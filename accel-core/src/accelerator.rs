@@ -1,6 +1,6 @@
 //! The interface every acceleration structure offers, and its reports.
 
-use crate::{Aabb, Hit, QueryError, Ray, Real};
+use crate::{Aabb, Hit, PrimitiveSet, QueryError, Ray, Real};
 use core::fmt;
 use std::time::Duration;
 
@@ -171,6 +171,38 @@ pub trait Accelerator<T: Real>: Sync {
 
     /// Build and shape statistics.
     fn stats(&self) -> AccelStats;
+}
+
+/// The box a structure gathers candidates from for a region query:
+/// `region` grown by `gamma(1024)` of the largest coordinate in play (the
+/// region's and the structure's `bounds`). A primitive's exact overlap test
+/// may accept a box up to its own rounding allowance away from the primitive
+/// (the triangle–box test allows `gamma(32)` of the magnitudes involved), far
+/// less than this margin, so no primitive the exact test accepts lies outside
+/// the grown box. Finish with [`region_matches`].
+#[must_use]
+pub fn region_search_box<T: Real>(region: &Aabb<T>, bounds: &Aabb<T>) -> Aabb<T> {
+    let scale = region.max_abs_coordinate().max(bounds.max_abs_coordinate());
+    let margin = T::gamma(1024) * scale;
+    Aabb {
+        min: region.min.map(|x| (x - margin).next_down()),
+        max: region.max.map(|x| (x + margin).next_up()),
+    }
+}
+
+/// The end of a region query: the candidates a structure gathered (from
+/// [`region_search_box`]), ascending and without repeats, kept where the
+/// primitive's own overlap test accepts `region`.
+#[must_use]
+pub fn region_matches<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+    region: &Aabb<T>,
+    mut candidates: Vec<u32>,
+) -> Vec<u32> {
+    candidates.sort_unstable();
+    candidates.dedup();
+    candidates.retain(|&p| prims.overlaps_box(p as usize, region));
+    candidates
 }
 
 /// Checks a region for [`Accelerator::query_region`].

@@ -64,7 +64,10 @@ pub mod gltf_scene;
 pub mod scenes;
 
 pub use aabb::Aabb;
-pub use accelerator::{AccelStats, Accelerator, CostCounter, TraversalCounters, validate_region};
+pub use accelerator::{
+    AccelStats, Accelerator, CostCounter, TraversalCounters, region_matches, region_search_box,
+    validate_region,
+};
 pub use bounds::primitive_bounds;
 pub use brute::BruteForce;
 pub use error::BuildError;

@@ -5,7 +5,7 @@ use crate::dda::BeamWalk;
 use crate::grid::Grid;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
-    TraversalCounters, TraversalRay, nearer, validate_region,
+    TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
@@ -144,14 +144,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
         if region.is_empty() || self.empty {
             return Ok(Vec::new());
         }
-        let scale = region
-            .max_abs_coordinate()
-            .max(self.geometry.bounds().max_abs_coordinate());
-        let margin = T::gamma(64) * scale;
-        let grown = Aabb {
-            min: region.min.map(|x| (x - margin).next_down()),
-            max: region.max.map(|x| (x + margin).next_up()),
-        };
+        let grown = region_search_box(region, self.geometry.bounds());
         let Some(cells) = self.geometry.cells_overlapping(&grown) else {
             return Ok(Vec::new());
         };
@@ -159,10 +152,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
         for c in cells.iter() {
             found.extend_from_slice(self.cells.cell(self.geometry.linear_index(c)));
         }
-        found.sort_unstable();
-        found.dedup();
-        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
-        Ok(found)
+        Ok(region_matches(self.prims, region, found))
     }
 
     fn stats(&self) -> AccelStats {

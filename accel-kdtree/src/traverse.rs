@@ -17,7 +17,7 @@ use crate::build::decode_split;
 use crate::tree::KdTree;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
-    TraversalCounters, TraversalRay, nearer, validate_region,
+    TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
 
 /// Traversal stack entries: at most one per level.
@@ -258,14 +258,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
         if region.is_empty() || self.bounds.is_empty() {
             return Ok(Vec::new());
         }
-        let scale = region
-            .max_abs_coordinate()
-            .max(self.bounds.max_abs_coordinate());
-        let margin = T::gamma(1024) * scale;
-        let grown = Aabb {
-            min: region.min.map(|x| (x - margin).next_down()),
-            max: region.max.map(|x| (x + margin).next_up()),
-        };
+        let grown = region_search_box(region, &self.bounds);
         let mut found: Vec<u32> = Vec::new();
         if grown.overlaps(&self.bounds) {
             let mut stack = vec![0usize];
@@ -284,10 +277,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
                 }
             }
         }
-        found.sort_unstable();
-        found.dedup();
-        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
-        Ok(found)
+        Ok(region_matches(self.prims, region, found))
     }
 
     fn stats(&self) -> AccelStats {

@@ -18,7 +18,7 @@ use crate::octree::Octree;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PreparedRay, PrimitiveSet,
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalCounters, TraversalRay, nearer,
-    validate_region,
+    region_matches, region_search_box, validate_region,
 };
 use accel_grid::cells::CellBox;
 use accel_grid::dda::BeamWalk;
@@ -316,20 +316,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
             return Ok(Vec::new());
         }
         let root = &self.nodes[0];
-        let scale = region
-            .max_abs_coordinate()
-            .max(root.geometry.bounds().max_abs_coordinate());
-        let margin = T::gamma(64) * scale;
-        let grown = Aabb {
-            min: region.min.map(|x| (x - margin).next_down()),
-            max: region.max.map(|x| (x + margin).next_up()),
-        };
+        let grown = region_search_box(region, root.geometry.bounds());
         let mut found = Vec::new();
         self.gather(root, &grown, &mut found);
-        found.sort_unstable();
-        found.dedup();
-        found.retain(|&p| self.prims.overlaps_box(p as usize, region));
-        Ok(found)
+        Ok(region_matches(self.prims, region, found))
     }
 
     fn stats(&self) -> AccelStats {
