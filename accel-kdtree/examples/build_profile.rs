@@ -1,9 +1,11 @@
-//! Builds the generated terrain once on one thread, or `THREADS` (for profilers):
-//! `cargo run --release -p accel-kdtree --example build_profile -- 1000000`.
+//! Builds the generated terrain of N triangles once on one thread (for
+//! profilers), optionally with the binned SAH above a node size and a bin count:
+//! `cargo run --release -p accel-kdtree --example build_profile -- N [BINNED_ABOVE] [BINS]`;
+//! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset.
 
 use accel_core::Accelerator;
 use accel_core::scenes::terrain;
-use accel_kdtree::KdTree;
+use accel_kdtree::{KdTree, KdTreeParams};
 
 fn main() {
     let n: usize = std::env::args()
@@ -15,13 +17,39 @@ fn main() {
         .num_threads(1)
         .build()
         .expect("pool");
-    let start = std::time::Instant::now();
-    let tree = pool.install(|| KdTree::new(&mesh).expect("builds"));
+    let (start, cpu_start) = (std::time::Instant::now(), cpu_seconds());
+    let mut params = match std::env::var("KD_PRESET").as_deref() {
+        Ok("fast-build") => KdTreeParams::fast_build(),
+        Ok("best-traversal") => KdTreeParams::best_traversal(),
+        Ok("pbrt") => KdTreeParams::pbrt(),
+        _ => KdTreeParams::default(),
+    };
+    if let Some(above) = std::env::args().nth(2).and_then(|s| s.parse().ok()) {
+        params.binned_above = above;
+    }
+    if let Some(bins) = std::env::args().nth(3).and_then(|s| s.parse().ok()) {
+        params.bins = bins;
+    }
+    let tree = pool.install(|| KdTree::with_params(&mesh, &params).expect("builds"));
     let s = start.elapsed().as_secs_f64();
+    let cpu = cpu_seconds().zip(cpu_start).map(|(b, a)| b - a);
     println!(
-        "{} tris in {s:.3} s: {:.3} Mtris/s; {}",
+        "{} tris in {s:.3} s: {:.3} Mtris/s (CPU {}); {}",
         mesh.triangle_count(),
         mesh.triangle_count() as f64 / s / 1e6,
+        cpu.map_or("unknown".into(), |c| format!("{c:.2} s")),
         tree.stats()
     );
+}
+
+/// The process's CPU time (user + system) from `/proc/self/stat`, which on a
+/// shared machine varies less than the wall clock; `None` off Linux.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are the
+    // 14th and 15th fields, in clock ticks (100 per second on Linux).
+    let rest = stat.rsplit_once(')')?.1;
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }

@@ -75,6 +75,13 @@ fn main() {
         }
         for (name, p) in [
             ("kdtree-default", KdTreeParams::default()),
+            (
+                "kdtree-exact",
+                KdTreeParams {
+                    binned_above: usize::MAX,
+                    ..KdTreeParams::default()
+                },
+            ),
             ("kdtree-pbrt", KdTreeParams::pbrt()),
             ("kdtree-fast_build", KdTreeParams::fast_build()),
             ("kdtree-best_traversal", KdTreeParams::best_traversal()),

@@ -21,7 +21,11 @@
 //! conservative Sutherland–Hodgman-style clipping for triangles) before its
 //! new events are made, so candidate planes hug the geometry inside the node.
 //! Primitives lying *in* a candidate plane are counted apart and sent to the
-//! cheaper side. Subtrees are built in parallel with rayon. A naive O(n²)
+//! cheaper side. Nodes over [`KdTreeParams::binned_above`] primitives (only
+//! the top levels of large scenes) choose among evenly spaced planes with
+//! the binned SAH instead (Wald, "On fast construction of SAH-based bounding
+//! volume hierarchies", IEEE RT 2007), which spares the whole-scene sort; the
+//! sweep takes over below. Subtrees are built in parallel with rayon. A naive O(n²)
 //! builder with the same candidates and costs is kept as the reference the
 //! sweep must match node for node.
 //!

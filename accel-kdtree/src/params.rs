@@ -50,6 +50,17 @@ pub struct KdTreeParams {
     /// Subtrees over at least this many primitives are built in parallel
     /// (rayon). Default 4096.
     pub parallel_threshold: usize,
+    /// Nodes over more primitives than this choose their split with the
+    /// binned SAH (`bins − 1` evenly spaced planes per axis, no sorting)
+    /// instead of the exact event sweep, which takes over below. It spares
+    /// the whole-scene event sort and halves the memory of the top levels;
+    /// on the 1M-triangle terrain the build is about 6% faster and rays
+    /// visit as many nodes and primitives as in the exact tree (measured in
+    /// `examples/ray_costs`). `usize::MAX` makes every split exact. Default
+    /// 4096.
+    pub binned_above: usize,
+    /// Bins per axis of the binned SAH, 2 to 4096. Default 64.
+    pub bins: u32,
 }
 
 impl Default for KdTreeParams {
@@ -62,6 +73,8 @@ impl Default for KdTreeParams {
             leaf_size: 2,
             max_references: 1 << 28,
             parallel_threshold: 4096,
+            binned_above: 4096,
+            bins: 64,
         }
     }
 }
@@ -69,6 +82,8 @@ impl Default for KdTreeParams {
 impl KdTreeParams {
     /// The deepest tree the traversal stack supports.
     pub const MAX_DEPTH: u32 = 64;
+    /// The most bins per axis of the binned SAH.
+    pub const MAX_BINS: u32 = 4096;
 
     /// Quicker to build, slower to trace: nodes of up to 4 primitives become
     /// leaves unsearched, and a traversal cost of 2 stops the SAH earlier.
@@ -82,7 +97,7 @@ impl KdTreeParams {
     }
 
     /// pbrt-v3's parameters (intersection 80, traversal 1, empty bonus 0.5,
-    /// every node searched): deeper trees with the fewest primitives per
+    /// every node searched, every split exact): deeper trees with the fewest primitives per
     /// leaf, for scenes where the primitive tests dominate (expensive
     /// user primitives); on triangle scenes it traces about as fast as the
     /// default.
@@ -92,17 +107,19 @@ impl KdTreeParams {
             intersect_cost: 80.0,
             empty_bonus: 0.5,
             leaf_size: 0,
+            binned_above: usize::MAX,
             ..Self::default()
         }
     }
 
     /// pbrt-v4's `KdTreeAggregate` parameters exactly (intersection 5,
-    /// traversal 1, empty bonus 0.5, every node searched).
+    /// traversal 1, empty bonus 0.5, every node searched, every split exact).
     #[must_use]
     pub fn pbrt() -> Self {
         Self {
             empty_bonus: 0.5,
             leaf_size: 0,
+            binned_above: usize::MAX,
             ..Self::default()
         }
     }
@@ -158,6 +175,9 @@ impl KdTreeParams {
         {
             return bad("max_depth", d.to_string(), "at most 64");
         }
+        if !(2..=Self::MAX_BINS).contains(&self.bins) {
+            return bad("bins", self.bins.to_string(), "2 to 4096");
+        }
         Ok(())
     }
 }
@@ -201,12 +221,17 @@ mod tests {
                 max_depth: Some(65),
                 ..KdTreeParams::default()
             },
+            KdTreeParams {
+                bins: 1,
+                ..KdTreeParams::default()
+            },
         ];
         let names = [
             "intersect_cost",
             "traversal_cost",
             "empty_bonus",
             "max_depth",
+            "bins",
         ];
         for (p, want) in cases.iter().zip(names) {
             match p.validate() {

@@ -1,6 +1,7 @@
 //! The O(n log n) build: root events, the recursion (parallel at the top),
 //! and the flattening of the pieces into one depth-first node array.
 
+pub(crate) mod binned;
 pub(crate) mod events;
 pub(crate) mod sah;
 pub(crate) mod split;
@@ -8,6 +9,7 @@ pub(crate) mod split;
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
+use binned::{BinnedNode, best_binned_split, split_binned};
 use events::{Events, push_axis_events, sort_events};
 use sah::{Sah, Split, best_split};
 use split::{NodeWork, split_node};
@@ -195,6 +197,38 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
     }
 }
 
+/// Builds a subtree whose large nodes split by the binned SAH; the exact
+/// sweep takes over at [`KdTreeParams::binned_above`] primitives, and
+/// wherever the bins find no split cheaper than a leaf.
+fn build_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    ctx: &Ctx<'_, T, P>,
+    node: BinnedNode<T>,
+) -> Piece<T> {
+    let n = node.prims.len();
+    if n <= ctx.params.binned_above || ctx.leaf_without_search(n, node.depth) {
+        return build_piece(ctx, node.into_events());
+    }
+    let split = Sah::new(ctx.params, &node.bounds).and_then(|sah| {
+        best_binned_split(&sah, &node.bounds, &node.boxes, ctx.params.bins as usize)
+            .filter(|s| s.cost < sah.leaf_cost(n))
+    });
+    let Some(s) = split else {
+        return build_piece(ctx, node.into_events());
+    };
+    let (below, above) = split_binned(node, &s, ctx.prims);
+    let (below, above) = if n >= ctx.params.parallel_threshold {
+        rayon::join(|| build_binned(ctx, below), || build_binned(ctx, above))
+    } else {
+        (build_binned(ctx, below), build_binned(ctx, above))
+    };
+    Piece::Inner {
+        axis: s.axis,
+        pos: s.pos,
+        below: Box::new(below),
+        above: Box::new(above),
+    }
+}
+
 /// Appends a piece to `out`, relocating its indices.
 fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError> {
     match piece {
@@ -275,6 +309,14 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut out = Out::new();
     if naive {
         crate::naive::build_naive(&ctx, &boxes, bounds, &mut out);
+    } else if n > params.binned_above {
+        let root = BinnedNode {
+            bounds,
+            prims: (0..n as u32).collect(),
+            boxes,
+            depth: 0,
+        };
+        flatten(build_binned(&ctx, root), &mut out)?;
     } else {
         let events = root_events(&boxes);
         let root = NodeWork {

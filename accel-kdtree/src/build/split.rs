@@ -11,7 +11,7 @@
 //! and merged into the child's lists. Nothing is re-sorted: the split is
 //! linear in the node's events plus `s log s` for `s` straddlers.
 
-use super::events::{END, Events, PLANAR, push_events, sort_events};
+use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
 use super::sah::Split;
 use accel_core::{Aabb, PrimitiveSet, Real};
 
@@ -32,6 +32,35 @@ const BOTH: u32 = 3;
 const SIDE_SHIFT: u32 = 30;
 /// The child index below it.
 const INDEX_MASK: u32 = (1 << SIDE_SHIFT) - 1;
+
+/// Splits one sorted event list by the primitives' destination words: the
+/// left child's events stay in `list` (in place), the right child's go to a
+/// new list, both in order and renumbered; straddlers' events are dropped
+/// (they are clipped anew). Branch-free: every event is written to both
+/// outputs and each cursor advances only on its side, so the unpredictable
+/// side costs no mispredicted branch.
+fn partition<T: Real>(mut list: Vec<Event<T>>, dest: &[u32]) -> (Vec<Event<T>>, Vec<Event<T>>) {
+    let len = list.len();
+    let Some(&first) = list.first() else {
+        return (list, Vec::new());
+    };
+    let mut rights = vec![first; len];
+    let (mut wl, mut wr) = (0, 0);
+    for r in 0..len {
+        let e = list[r];
+        let d = dest[e.local()];
+        let moved = e.with_local(d & INDEX_MASK);
+        let side = d >> SIDE_SHIFT;
+        // wl <= r: the slot written was already read.
+        list[wl] = moved;
+        wl += usize::from(side == LEFT);
+        rights[wr] = moved;
+        wr += usize::from(side == RIGHT);
+    }
+    list.truncate(wl);
+    rights.truncate(wr);
+    (list, rights)
+}
 
 /// Splits `node` at `split` into its two children.
 pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
@@ -119,24 +148,7 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut left_events: Events<T> = Default::default();
     let mut right_events: Events<T> = Default::default();
     for (a, list) in events.into_iter().enumerate() {
-        let mut lefts = list;
-        let estimate = lefts.len() * n_right / n.max(1) + right_new[a].len() + 8;
-        let mut rights = Vec::with_capacity(estimate);
-        let mut w = 0;
-        for r in 0..lefts.len() {
-            let e = lefts[r];
-            let d = dest[e.local()];
-            let moved = e.with_local(d & INDEX_MASK);
-            match d >> SIDE_SHIFT {
-                LEFT => {
-                    lefts[w] = moved;
-                    w += 1;
-                }
-                RIGHT => rights.push(moved),
-                _ => {}
-            }
-        }
-        lefts.truncate(w);
+        let (mut lefts, mut rights) = partition(list, &dest);
         for (dst, new) in [
             (&mut lefts, &mut left_new[a]),
             (&mut rights, &mut right_new[a]),
