@@ -162,7 +162,11 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         // and catch this trail up at the first event at or after its
         // crossing: now if that is the next event, else the walk turns wide.
         let tau = self.time(a, self.exit_offset(a, old_lead) - self.lead_off[a]);
-        if !(tau <= self.next_event()) {
+        // `next_event` without its NaN handling: crossings are never NaN.
+        let [t0, t1, t2] = self.t_lead;
+        let t01 = if t1 < t0 { t1 } else { t0 };
+        let next = if t2 < t01 { t2 } else { t01 };
+        if !(tau <= next) {
             self.trail = self.lead;
             self.trail[a] = old_lead;
             self.t_trail = [T::INFINITY; 3];
