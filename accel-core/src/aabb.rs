@@ -264,28 +264,31 @@ impl<T: Real> Aabb<T> {
     #[inline]
     #[must_use]
     pub fn beam_interval(&self, origin: Vec3<T>, dir: Vec3<T>, margin: T) -> Option<(T, T)> {
-        let mut t0 = T::NEG_INFINITY;
-        let mut t1 = T::INFINITY;
-        for axis in 0..3 {
+        // One slab per axis, written out so that the axes are constants
+        // (a loop over a runtime axis index selects every component by a
+        // branch).
+        let slab = |axis: usize| -> Option<(T, T)> {
             let d = dir[axis];
             let lo = (self.min[axis] - origin[axis]) - margin;
             let hi = (self.max[axis] - origin[axis]) + margin;
             if d == T::ZERO {
-                if lo > T::ZERO || hi < T::ZERO {
-                    return None;
-                }
-                continue;
+                return if lo > T::ZERO || hi < T::ZERO {
+                    None
+                } else {
+                    Some((T::NEG_INFINITY, T::INFINITY))
+                };
             }
             // Division (not a reciprocal) keeps 0/d = 0 exact for origins on a face
             // and stays finite for tiny components.
-            let mut near = lo / d;
-            let mut far = hi / d;
-            if near > far {
-                core::mem::swap(&mut near, &mut far);
-            }
-            t0 = t0.max(near);
-            t1 = t1.min(far);
-        }
+            let near = lo / d;
+            let far = hi / d;
+            Some(if near > far { (far, near) } else { (near, far) })
+        };
+        let (n0, f0) = slab(0)?;
+        let (n1, f1) = slab(1)?;
+        let (n2, f2) = slab(2)?;
+        let t0 = T::NEG_INFINITY.max(n0).max(n1).max(n2);
+        let t1 = T::INFINITY.min(f0).min(f1).min(f2);
         let slack = T::gamma(3) + T::gamma(3);
         let t0 = t0 - t0.abs() * slack;
         let t1 = t1 + t1.abs() * slack;

@@ -25,6 +25,31 @@ pub fn intersect_triangle<T: Real>(
     p2: Vec3<T>,
     t_max: T,
 ) -> Option<PrimHit<T>> {
+    // The axes are per-ray constants: one dispatch per test to a copy of the
+    // test with the permutation fixed at compile time turns every component
+    // selection into a plain field access (a runtime index is a three-way
+    // branch per component). The arithmetic is the same in every arm.
+    match ray.axes {
+        [1, 2, 0] => watertight(ray, [1, 2, 0], p0, p1, p2, t_max),
+        [2, 1, 0] => watertight(ray, [2, 1, 0], p0, p1, p2, t_max),
+        [2, 0, 1] => watertight(ray, [2, 0, 1], p0, p1, p2, t_max),
+        [0, 2, 1] => watertight(ray, [0, 2, 1], p0, p1, p2, t_max),
+        [0, 1, 2] => watertight(ray, [0, 1, 2], p0, p1, p2, t_max),
+        [1, 0, 2] => watertight(ray, [1, 0, 2], p0, p1, p2, t_max),
+        axes => watertight(ray, axes, p0, p1, p2, t_max),
+    }
+}
+
+/// The body of [`intersect_triangle`] for the permutation `[kx, ky, kz]`.
+#[inline(always)]
+fn watertight<T: Real>(
+    ray: &PreparedRay<T>,
+    [kx, ky, kz]: [usize; 3],
+    p0: Vec3<T>,
+    p1: Vec3<T>,
+    p2: Vec3<T>,
+    t_max: T,
+) -> Option<PrimHit<T>> {
     // Translation and shear in f64 (exact or nearly so for f32 inputs): in
     // T, `p − o` rounds to T's spacing at |p|, which for a triangle much
     // larger than its distance to the origin moves `t` by far more than an
@@ -32,7 +57,6 @@ pub fn intersect_triangle<T: Real>(
     // goes through the same transform, so shared edges stay watertight.
     let w3 = |v: Vec3<T>| v.map(T::to_f64);
     let o = w3(ray.ray.origin);
-    let [kx, ky, kz] = ray.axes;
     let s = w3(ray.shear);
     let a = w3(p0) - o;
     let b = w3(p1) - o;
@@ -40,6 +64,19 @@ pub fn intersect_triangle<T: Real>(
     let (ax, ay) = (a[kx] - s.x * a[kz], a[ky] - s.y * a[kz]);
     let (bx, by) = (b[kx] - s.x * b[kz], b[ky] - s.y * b[kz]);
     let (cx, cy) = (c[kx] - s.x * c[kz], c[ky] - s.y * c[kz]);
+
+    // Most tests miss. The plain products usually settle that already: where
+    // their difference surely has the sign of the exact edge function, two
+    // opposite signs reject the triangle, exactly as the edge functions below
+    // would (their signs are exact), without their cancellation fallback.
+    let (su, sv, sw) = (
+        sure_sign(cx * by, cy * bx),
+        sure_sign(ax * cy, ay * cx),
+        sure_sign(bx * ay, by * ax),
+    );
+    if (su < 0.0 || sv < 0.0 || sw < 0.0) && (su > 0.0 || sv > 0.0 || sw > 0.0) {
+        return None;
+    }
 
     let u = f64::diff_of_products(cx, by, cy, bx);
     let v = f64::diff_of_products(ax, cy, ay, cx);
@@ -64,6 +101,23 @@ pub fn intersect_triangle<T: Real>(
         u: T::from_f64(v * inv_det),
         v: T::from_f64(w * inv_det),
     })
+}
+
+/// `p − q` for the rounded products `p ≈ a·b`, `q ≈ c·d` when its sign is
+/// surely that of the exact `a·b − c·d`, else 0 (unknown).
+///
+/// The products and the difference round once each, so
+/// `|(p − q) − (a·b − c·d)| ≤ u·(|p| + |q|)/(1 − u)`; the test asks for more
+/// than twice that, plus an absolute term for products that underflow.
+/// Non-finite products never pass (the comparison is false for NaN and ∞).
+#[inline(always)]
+fn sure_sign(p: f64, q: f64) -> f64 {
+    let r = p - q;
+    if r.abs() > 2.0 * f64::EPSILON * (p.abs() + q.abs()) + f64::MIN_POSITIVE {
+        r
+    } else {
+        0.0
+    }
 }
 
 /// Whether the triangle meets the closed box `b`, by the 13 separating axes of

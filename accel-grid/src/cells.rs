@@ -188,8 +188,10 @@ impl<T: Real> GridGeometry<T> {
         let b = &self.boundaries[axis];
         let last = self.resolution[axis] - 1;
         let guess = ((origin - b[0]) + rel) * self.scale[axis];
+        // Truncation is the floor of a positive guess, without the libm call
+        // that `floor` becomes on baseline x86-64.
         let mut i = if guess > T::ZERO {
-            (guess.floor().to_i64_saturating().min(last as i64)) as u32
+            (guess.to_i64_saturating().min(last as i64)) as u32
         } else {
             0
         };

@@ -20,19 +20,47 @@
 use crate::cells::{CellBox, GridGeometry};
 use accel_core::{Real, TraversalRay, Vec3};
 
+/// What one step of a [`BeamWalk`] opens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// The walk is over.
+    End,
+    /// One cell: the common case of a beam far from cell edges.
+    Cell([u32; 3]),
+    /// A box of cells (the beam runs along a face, an edge or a corner).
+    Cells(CellBox),
+}
+
 /// A beam walking the cells of one grid front to back.
+///
+/// While the beam is *thin* (its trail equals its lead on every axis, so its
+/// cross-section lies in one cell) a step is the classic DDA step plus one
+/// trail crossing, done at once: the trail left behind on the stepped axis
+/// catches up as soon as it is known to cross before the next lead event,
+/// which is exactly when the lazy catch-up of the general step would have
+/// moved it. Only when it cannot (the ray is near another axis's boundary)
+/// does the walk turn *wide* and take the general step.
 #[derive(Clone, Debug)]
 pub struct BeamWalk<'g, T> {
-    geom: &'g GridGeometry<T>,
+    bounds: [&'g [T]; 3],
     origin: Vec3<T>,
     dir: Vec3<T>,
     inv_dir: Vec3<T>,
-    delta: T,
-    step: [i8; 3],
+    /// Per axis, the beam front's offset from a boundary: `−delta` for a
+    /// positive direction, `+delta` for a negative one (the trail's is its
+    /// negation).
+    lead_off: [T; 3],
+    /// Per axis, 1 when stepping up (a cell's exit is its upper boundary,
+    /// index `cell + 1`), else 0.
+    up: [u32; 3],
+    step: [i32; 3],
     lead: [u32; 3],
+    /// Valid only while the walk is wide (`!thin`); equal to `lead` otherwise.
     trail: [u32; 3],
     t_lead: [T; 3],
+    /// Valid only while the walk is wide; `+∞` on every axis otherwise.
     t_trail: [T; 3],
+    thin: bool,
 }
 
 impl<'g, T: Real> BeamWalk<'g, T> {
@@ -44,16 +72,18 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         let r = ray.ray();
         let (origin, dir, delta) = (r.origin, r.direction, ray.delta);
         let mut walk = Self {
-            geom,
+            bounds: [geom.boundaries(0), geom.boundaries(1), geom.boundaries(2)],
             origin,
             dir,
             inv_dir: ray.prepared.inv_dir,
-            delta,
+            lead_off: [T::ZERO; 3],
+            up: [0; 3],
             step: [0; 3],
             lead: [0; 3],
             trail: [0; 3],
             t_lead: [T::INFINITY; 3],
             t_trail: [T::INFINITY; 3],
+            thin: false,
         };
         let mut cells = CellBox::single([0; 3]);
         for a in 0..3 {
@@ -65,10 +95,13 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             let d = dir[a];
             if d > T::ZERO {
                 walk.step[a] = 1;
+                walk.up[a] = 1;
+                walk.lead_off[a] = -delta;
                 walk.trail[a] = low;
                 walk.lead[a] = high;
             } else if d < T::ZERO {
                 walk.step[a] = -1;
+                walk.lead_off[a] = delta;
                 walk.trail[a] = high;
                 walk.lead[a] = low;
             } else {
@@ -80,6 +113,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             walk.t_lead[a] = walk.lead_time(a);
             walk.t_trail[a] = walk.trail_time(a);
         }
+        walk.thin = walk.trail == walk.lead;
         (walk, cells)
     }
 
@@ -95,24 +129,59 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// `limit`, and returns the cells it opens; `None` ends the walk.
     #[inline]
     pub fn advance(&mut self, limit: T) -> Option<CellBox> {
+        match self.step(limit) {
+            Step::End => None,
+            Step::Cell(c) => Some(CellBox::single(c)),
+            Step::Cells(b) => Some(b),
+        }
+    }
+
+    /// As [`BeamWalk::advance`], telling a single cell apart from a box.
+    #[inline]
+    pub fn step(&mut self, limit: T) -> Step {
         let [t0, t1, t2] = self.t_lead;
-        let a = if t0 <= t1 {
-            if t0 <= t2 { 0 } else { 2 }
-        } else if t1 <= t2 {
-            1
-        } else {
-            2
-        };
+        // The smallest crossing, ties to the lowest axis, without branches.
+        let (a01, t01) = if t1 < t0 { (1, t1) } else { (0, t0) };
+        let a = if t2 < t01 { 2 } else { a01 };
         let t = self.t_lead[a];
         // +∞ is both the sentinel of an axis whose front is in its last cell
         // and what a crossing beyond T's range rounds to (a tiny direction):
         // no representable hit lies past it, so the walk ends there even when
         // `limit` is +∞ too (else the trails would chase +∞ forever).
         if !(t <= limit) || t == T::INFINITY {
-            return None;
+            return Step::End;
+        }
+        if !self.thin {
+            return self.wide_step(a, t);
         }
         let old_lead = self.lead[a];
-        self.lead[a] = old_lead.wrapping_add_signed(i32::from(self.step[a]));
+        self.lead[a] = old_lead.wrapping_add_signed(self.step[a]);
+        self.t_lead[a] = self.lead_time(a);
+        // The trail on `a` now lags at `old_lead`; the other trails have no
+        // crossing ahead, so the general step would open the one cell `lead`
+        // and catch this trail up at the first event at or after its
+        // crossing: now if that is the next event, else the walk turns wide.
+        let tau = self.time(a, self.exit_offset(a, old_lead) - self.lead_off[a]);
+        // `next_event` without its NaN handling: crossings are never NaN.
+        let [t0, t1, t2] = self.t_lead;
+        let t01 = if t1 < t0 { t1 } else { t0 };
+        let next = if t2 < t01 { t2 } else { t01 };
+        if !(tau <= next) {
+            self.trail = self.lead;
+            self.trail[a] = old_lead;
+            self.t_trail = [T::INFINITY; 3];
+            self.t_trail[a] = tau;
+            self.thin = false;
+        }
+        Step::Cell(self.lead)
+    }
+
+    /// The general step (Amanatides & Woo on the lead, lazy trails) along
+    /// axis `a`, whose crossing `t` is the next event.
+    #[inline(never)]
+    fn wide_step(&mut self, a: usize, t: T) -> Step {
+        let old_lead = self.lead[a];
+        self.lead[a] = old_lead.wrapping_add_signed(self.step[a]);
         self.t_lead[a] = self.lead_time(a);
         if self.trail[a] == old_lead {
             // The trail had caught up with the lead; it now has a crossing ahead.
@@ -121,7 +190,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         let mut cells = CellBox::single(self.lead);
         for b in 0..3 {
             while self.t_trail[b] <= t {
-                self.trail[b] = self.trail[b].wrapping_add_signed(i32::from(self.step[b]));
+                self.trail[b] = self.trail[b].wrapping_add_signed(self.step[b]);
                 self.t_trail[b] = self.trail_time(b);
             }
             if b != a {
@@ -129,7 +198,14 @@ impl<'g, T: Real> BeamWalk<'g, T> {
                 cells.hi[b] = self.trail[b].max(self.lead[b]);
             }
         }
-        Some(cells)
+        // A caught-up trail has no crossing ahead (`trail_time` is +∞), so
+        // the walk is thin again exactly when every trail is at its lead.
+        self.thin = self.trail == self.lead;
+        if cells.lo == cells.hi {
+            Step::Cell(cells.lo)
+        } else {
+            Step::Cells(cells)
+        }
     }
 
     /// `rel / d` along `axis`, by the reciprocal when it is finite (a
@@ -144,20 +220,21 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         }
     }
 
-    /// When the beam's front crosses into the cell after `lead`.
+    /// `boundary − origin` for the boundary through which the beam leaves
+    /// cell `cell` along `axis` (the caller checks that it is interior).
+    #[inline]
+    fn exit_offset(&self, axis: usize, cell: u32) -> T {
+        self.bounds[axis][(cell + self.up[axis]) as usize] - self.origin[axis]
+    }
+
+    /// When the beam's front crosses into the cell after `lead`: `+∞` when
+    /// that exit is the grid's outer boundary.
     #[inline]
     fn lead_time(&self, axis: usize) -> T {
-        let b = self.geom.boundaries(axis);
-        let lead = self.lead[axis] as usize;
-        let o = self.origin[axis];
-        if self.step[axis] > 0 {
-            if lead + 1 < b.len() - 1 {
-                self.time(axis, (b[lead + 1] - o) - self.delta)
-            } else {
-                T::INFINITY
-            }
-        } else if lead > 0 {
-            self.time(axis, (b[lead] - o) + self.delta)
+        let b = self.bounds[axis];
+        let exit = (self.lead[axis] + self.up[axis]) as usize;
+        if exit > 0 && exit < b.len() - 1 {
+            self.time(axis, (b[exit] - self.origin[axis]) + self.lead_off[axis])
         } else {
             T::INFINITY
         }
@@ -166,17 +243,16 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// When the beam's back leaves the cell `trail` (never past the lead).
     #[inline]
     fn trail_time(&self, axis: usize) -> T {
-        let b = self.geom.boundaries(axis);
-        let trail = self.trail[axis] as usize;
-        let o = self.origin[axis];
-        if self.step[axis] > 0 {
-            if self.trail[axis] < self.lead[axis] {
-                self.time(axis, (b[trail + 1] - o) + self.delta)
-            } else {
-                T::INFINITY
-            }
-        } else if self.trail[axis] > self.lead[axis] {
-            self.time(axis, (b[trail] - o) - self.delta)
+        debug_assert!(if self.step[axis] > 0 {
+            self.trail[axis] <= self.lead[axis]
+        } else {
+            self.trail[axis] >= self.lead[axis]
+        });
+        if self.trail[axis] != self.lead[axis] {
+            self.time(
+                axis,
+                self.exit_offset(axis, self.trail[axis]) - self.lead_off[axis],
+            )
         } else {
             T::INFINITY
         }

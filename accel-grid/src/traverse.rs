@@ -1,7 +1,7 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
 use crate::cells::CellBox;
-use crate::dda::BeamWalk;
+use crate::dda::{BeamWalk, Step};
 use crate::grid::Grid;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
@@ -18,6 +18,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
             for c in cells.iter() {
                 f(self.cells.cell(self.geometry.linear_index(c)));
             }
+        }
+    }
+
+    /// Calls `f` with the reference list of every cell a walk step opened.
+    #[inline]
+    fn for_step(&self, step: Step, f: impl FnMut(&[u32])) {
+        match step {
+            Step::Cell(c) => {
+                let mut f = f;
+                f(self.cells.cell(self.geometry.linear_index(c)));
+            }
+            Step::Cells(b) => self.for_cells(b, f),
+            Step::End => {}
         }
     }
 
@@ -39,9 +52,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let mut mailbox = Mailbox::new();
         let mut best: Option<Hit<T>> = None;
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
-        let mut cells = first;
+        let mut cells = Step::Cells(first);
         loop {
-            self.for_cells(cells, |refs| {
+            self.for_step(cells, |refs| {
                 counter.node();
                 for &p in refs {
                     if mailbox.seen(p) {
@@ -58,9 +71,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                 Some(b) => tr.t_end.min(b.t + tr.t_tol),
                 None => tr.t_end,
             };
-            match walk.advance(limit) {
-                Some(next) => cells = next,
-                None => return Ok(best),
+            cells = walk.step(limit);
+            if cells == Step::End {
+                return Ok(best);
             }
         }
     }
@@ -76,10 +89,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         };
         let mut mailbox = Mailbox::new();
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
-        let mut cells = first;
+        let mut cells = Step::Cells(first);
         loop {
             let mut found = false;
-            self.for_cells(cells, |refs| {
+            self.for_step(cells, |refs| {
                 counter.node();
                 for &p in refs {
                     if found || mailbox.seen(p) {
@@ -95,9 +108,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
             if found {
                 return Ok(true);
             }
-            match walk.advance(tr.t_end) {
-                Some(next) => cells = next,
-                None => return Ok(false),
+            cells = walk.step(tr.t_end);
+            if cells == Step::End {
+                return Ok(false);
             }
         }
     }
