@@ -1,7 +1,8 @@
-//! Builds the generated terrain of N triangles once on one thread (for
+//! Builds the generated terrain of N triangles once, on one thread unless told (for
 //! profilers), optionally with the binned SAH above a node size and a bin count:
 //! `cargo run --release -p accel-kdtree --example build_profile -- N [BINNED_ABOVE] [BINS]`;
-//! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset.
+//! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `THREADS=n`
+//! builds on `n` threads.
 
 use accel_core::Accelerator;
 use accel_core::scenes::terrain;
@@ -13,8 +14,12 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(100_000);
     let mesh = terrain(n, 0x7E).cast::<f32>().expect("fits f32");
+    let threads = std::env::var("THREADS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .expect("pool");
     let (start, cpu_start) = (std::time::Instant::now(), cpu_seconds());
