@@ -6,15 +6,19 @@
 //! once (timed) and traces a sample of that render's ray mix (primary,
 //! shadow and occlusion rays from a view of about `--sample-primaries`
 //! primary rays; the faster of two passes). Its total for a budget is
-//! `build + rays × time per ray`. Then [`crate::choose::choose`] runs as
+//! `build + rays × time per ray`. A candidate whose pass would take longer
+//! than `--max-pass-time` (the uniform grid on a teapot in a stadium) is
+//! priced from the part of the sample traced in that time (spread over the
+//! whole view, see [`crate::choose::probe_per_ray`]). Then [`crate::choose::choose`] runs as
 //! `render --accel auto` would, and its choice's total (from the same table,
 //! so that both sides share one measurement) is compared with the best.
 //! The chooser's own cost (its probe, less the winner's build) is reported
-//! beside it.
+//! beside it. On a shared machine, `--rounds` measures every candidate
+//! several times in interleaved rounds and keeps the fastest.
 
 use crate::accel::{AccelConfig, build_config, kdtree_preset, octree_preset};
 use crate::app::{load_scene, mesh_in};
-use crate::choose::{self, ProbeRay, brute_per_ray, per_ray, view_probe};
+use crate::choose::{self, ProbeRay, brute_per_ray, probe_per_ray, view_probe};
 use crate::cli::threads_parser;
 use crate::output::PendingFile;
 use crate::tradeoff::{scene_list, short_name};
@@ -22,7 +26,7 @@ use accel_core::spawn::SpawnOffset;
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Options of `render choose-bench`.
 #[derive(Clone, Debug, Args)]
@@ -40,6 +44,26 @@ pub struct ChooseBenchArgs {
     /// Primary rays of the sampled view (plus their shadow and occlusion rays).
     #[arg(long, default_value_t = 12_288, value_parser = clap::value_parser!(u32).range(16..=4_000_000), allow_negative_numbers = true)]
     pub sample_primaries: u32,
+    /// Seconds one candidate may spend tracing the sample; a slower one is
+    /// priced from the rays traced by then.
+    #[arg(long, value_name = "SECONDS", default_value_t = 3.0, value_parser = positive_seconds)]
+    pub max_pass_time: f64,
+    /// Measure every candidate this many times, in interleaved rounds, and
+    /// keep its fastest build and fastest time per ray: on a shared machine
+    /// a burst of load lasting seconds then hits one round, not the result.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=10))]
+    pub rounds: u32,
+    /// Run only the chooser (its choice and its own cost), not the table of
+    /// every candidate: no ratio to the best, and an empty CSV.
+    #[arg(long)]
+    pub auto_only: bool,
+}
+
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a positive number of seconds")),
+    }
 }
 
 /// A render budget.
@@ -123,7 +147,7 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
         .build()
         .with_context(|| format!("cannot start {threads} threads"))?;
     let mut csv = String::from(
-        "scene,triangles,budget,rays,config,build_ms,ns_per_ray,total_s,chosen,best\n",
+        "scene,triangles,budget,rays,config,build_ms,ns_per_ray,timed_rays,total_s,chosen,best\n",
     );
     let mut summary = Vec::new();
     println!(
@@ -136,9 +160,11 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
         for budget in BUDGETS {
             let rays = budget.rays();
             let (table, choice) = pool.install(|| -> Result<_> {
-                let grid = crate::accel::build(crate::accel::AccelKind::Grid, &mesh)?;
+                // Every structure answers alike: the sample is made with the
+                // octree, which no scene makes slow (the grid can be).
+                let octree = crate::accel::build(crate::accel::AccelKind::Octree, &mesh)?;
                 let sample: Vec<ProbeRay<f32>> = view_probe(
-                    grid.as_ref(),
+                    octree.as_ref(),
                     &mesh,
                     &scene.view,
                     choose::ProbeShape {
@@ -149,19 +175,41 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                     },
                     SpawnOffset::ErrorBound,
                 )?;
-                drop(grid);
-                let mut table = Vec::new();
-                for config in candidates() {
-                    let (build_s, per) = if config == AccelConfig::Brute {
-                        (0.0, brute_per_ray(&mesh, &sample))
-                    } else {
-                        let t = Instant::now();
-                        let accel = build_config(&config, &mesh)?;
-                        let b = t.elapsed().as_secs_f64();
-                        (b, per_ray(accel.as_ref(), &sample)?)
-                    };
-                    table.push((config, build_s, per, build_s + rays as f64 * per));
+                drop(octree);
+                let max_pass = Duration::from_secs_f64(args.max_pass_time);
+                let all = if args.auto_only {
+                    Vec::new()
+                } else {
+                    candidates()
+                };
+                // (build s, s per ray, rays timed), the fastest of the rounds.
+                let mut fastest = vec![(f64::INFINITY, f64::INFINITY, 0usize); all.len()];
+                for _ in 0..args.rounds {
+                    for (config, best) in all.iter().zip(&mut fastest) {
+                        let (build_s, per, timed) = if *config == AccelConfig::Brute {
+                            (0.0, brute_per_ray(&mesh, &sample), 0)
+                        } else {
+                            let t = Instant::now();
+                            let accel = build_config(config, &mesh)?;
+                            let b = t.elapsed().as_secs_f64();
+                            let p =
+                                probe_per_ray(accel.as_ref(), &sample, max_pass, f64::INFINITY)?;
+                            (b, p.per_ray_s, p.rays)
+                        };
+                        best.0 = best.0.min(build_s);
+                        if per < best.1 {
+                            best.1 = per;
+                            best.2 = timed;
+                        }
+                    }
                 }
+                let table: Vec<_> = all
+                    .into_iter()
+                    .zip(fastest)
+                    .map(|(config, (build_s, per, timed))| {
+                        (config, build_s, per, timed, build_s + rays as f64 * per)
+                    })
+                    .collect();
                 let choice = choose::choose(&mesh, rays, |a| {
                     view_probe(
                         a,
@@ -182,36 +230,42 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                     .find(|e| e.config == choice.config)
                     .map_or(0.0, |e| e.build_s);
                 let overhead = choice.elapsed.as_secs_f64() - chosen_build;
-                Ok((table, (choice.config, overhead, choice.reason)))
+                let costs: Vec<String> = choice
+                    .estimates
+                    .iter()
+                    .map(|e| format!("{} {:.0} ms", e.config, e.cost_s * 1e3))
+                    .collect();
+                let reason = format!("{}\n    cost: {}", choice.reason, costs.join(", "));
+                Ok((table, (choice.config, overhead, reason)))
             })?;
-            let best = table
+            let (best, best_total) = table
                 .iter()
-                .min_by(|a, b| a.3.total_cmp(&b.3))
-                .expect("candidates")
-                .clone();
+                .min_by(|a, b| a.4.total_cmp(&b.4))
+                .map_or((None, f64::NAN), |b| (Some(b.0.clone()), b.4));
             let (chosen, overhead, reason) = choice;
             let chosen_total = table
                 .iter()
                 .find(|c| c.0 == chosen)
-                .map_or(f64::NAN, |c| c.3);
-            let ratio = chosen_total / best.3;
+                .map_or(f64::NAN, |c| c.4);
+            let ratio = chosen_total / best_total;
             let short = short_name(&scene.name);
             println!(
                 "{:<18} {:<8} {:>9} {:<22} {:>9.3} {:<22} {:>9.3} {:>7.3} {:>10.1}",
                 short,
                 budget.name,
                 rays,
-                best.0.label(),
-                best.3,
+                best.as_ref()
+                    .map_or_else(|| "-".to_owned(), AccelConfig::label),
+                best_total,
                 chosen.label(),
                 chosen_total,
                 ratio,
                 overhead * 1e3
             );
             println!("    auto: {reason}");
-            for (config, build_s, per, total) in &table {
+            for (config, build_s, per, timed, total) in &table {
                 csv += &format!(
-                    "{},{},{},{},{},{:.3},{:.2},{:.5},{},{}\n",
+                    "{},{},{},{},{},{:.3},{:.2},{},{:.5},{},{}\n",
                     short,
                     mesh.triangle_count(),
                     budget.name,
@@ -219,12 +273,15 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                     config.label(),
                     build_s * 1e3,
                     per * 1e9,
+                    timed,
                     total,
                     u8::from(*config == chosen),
-                    u8::from(*config == best.0)
+                    u8::from(Some(config) == best.as_ref())
                 );
             }
-            summary.push((short, budget.name, ratio));
+            if !args.auto_only {
+                summary.push((short, budget.name, ratio));
+            }
         }
     }
     let within = summary.iter().filter(|s| s.2 <= 1.10).count();
@@ -262,12 +319,8 @@ mod tests {
         let c = candidates();
         assert_eq!(c.len(), 4 + 4 + 4 + 1);
         // Everything the chooser may pick is measured.
-        for density in choose::GRID_DENSITIES {
-            assert!(c.contains(&AccelConfig::Grid { density }));
+        for config in choose::candidates() {
+            assert!(c.contains(&config), "{config}");
         }
-        assert!(c.contains(&AccelConfig::KdTree(
-            accel_kdtree::KdTreeParams::fast_build()
-        )));
-        assert!(c.contains(&AccelConfig::Octree(accel_octree::OctreeParams::default())));
     }
 }
