@@ -182,12 +182,28 @@ impl AccelConfig {
                 Some("default") => "kdtree".to_owned(),
                 Some(name) => format!("kdtree {name}"),
                 None => format!(
-                    "kdtree ci={} ct={} eb={}",
-                    p.intersect_cost, p.traversal_cost, p.empty_bonus
+                    "kdtree ci={} ct={} eb={}{}",
+                    p.intersect_cost,
+                    p.traversal_cost,
+                    p.empty_bonus,
+                    binning_label(p)
                 ),
             },
             Self::Brute => "brute".to_owned(),
         }
+    }
+}
+
+/// How a kD-tree's splits are chosen, when not the default: ` exact`, or
+/// ` binned>N/K` (binned SAH above N primitives, K bins).
+fn binning_label(p: &KdTreeParams) -> String {
+    let d = KdTreeParams::default();
+    if p.binned_above == usize::MAX {
+        " exact".to_owned()
+    } else if (p.binned_above, p.bins) == (d.binned_above, d.bins) {
+        String::new()
+    } else {
+        format!(" binned>{}/{}", p.binned_above, p.bins)
     }
 }
 
@@ -297,8 +313,25 @@ mod tests {
             ..KdTreeParams::default()
         };
         assert_eq!(
-            AccelConfig::KdTree(custom).label(),
+            AccelConfig::KdTree(custom.clone()).label(),
             "kdtree ci=20 ct=1 eb=0.3"
+        );
+        let exact = KdTreeParams {
+            binned_above: usize::MAX,
+            ..custom.clone()
+        };
+        assert_eq!(
+            AccelConfig::KdTree(exact).label(),
+            "kdtree ci=20 ct=1 eb=0.3 exact"
+        );
+        let binned = KdTreeParams {
+            binned_above: 100,
+            bins: 16,
+            ..custom
+        };
+        assert_eq!(
+            AccelConfig::KdTree(binned).label(),
+            "kdtree ci=20 ct=1 eb=0.3 binned>100/16"
         );
         // Out-of-range parameters are refused by the structure, by name.
         let bad = AccelConfig::KdTree(KdTreeParams {

@@ -264,6 +264,13 @@ pub struct DialArgs {
     /// kD-tree SAH bonus for cutting off empty space, in [0, 1).
     #[arg(long, value_name = "B", allow_negative_numbers = true)]
     pub kdtree_empty_bonus: Option<f64>,
+    /// kD-tree nodes over more primitives than N split by the binned SAH
+    /// (faster builds of large scenes); `max` makes every split exact.
+    #[arg(long, value_name = "N", value_parser = binned_above_parser)]
+    pub kdtree_binned_above: Option<usize>,
+    /// Bins per axis of the kD-tree's binned SAH (2 to 4096).
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    pub kdtree_bins: Option<u32>,
 }
 
 impl DialArgs {
@@ -322,6 +329,16 @@ impl DialArgs {
         add(
             self.kdtree_empty_bonus.is_some(),
             "--kdtree-empty-bonus",
+            AccelKind::KdTree,
+        );
+        add(
+            self.kdtree_binned_above.is_some(),
+            "--kdtree-binned-above",
+            AccelKind::KdTree,
+        );
+        add(
+            self.kdtree_bins.is_some(),
+            "--kdtree-bins",
             AccelKind::KdTree,
         );
         given
@@ -384,11 +401,26 @@ impl DialArgs {
                 if let Some(b) = self.kdtree_empty_bonus {
                     p.empty_bonus = b;
                 }
+                if let Some(n) = self.kdtree_binned_above {
+                    p.binned_above = n;
+                }
+                if let Some(k) = self.kdtree_bins {
+                    p.bins = k;
+                }
                 AccelConfig::KdTree(p)
             }
             AccelKind::Brute => AccelConfig::Brute,
         }
     }
+}
+
+/// A primitive count, or `max` for no limit.
+fn binned_above_parser(s: &str) -> Result<usize, String> {
+    if s == "max" {
+        return Ok(usize::MAX);
+    }
+    s.parse()
+        .map_err(|e| format!("{e}: expected a primitive count or `max`"))
 }
 
 fn epsilon_parser(s: &str) -> Result<f64, String> {
@@ -531,6 +563,10 @@ mod tests {
             "pbrt",
             "--kdtree-intersect-cost",
             "20",
+            "--kdtree-binned-above",
+            "max",
+            "--kdtree-bins",
+            "16",
             "--triangle-test",
             "moller-trumbore",
             "--spawn",
@@ -546,6 +582,8 @@ mod tests {
             panic!("not a kd-tree")
         };
         assert_eq!((p.intersect_cost, p.empty_bonus), (20.0, 0.5));
+        assert_eq!((p.binned_above, p.bins), (usize::MAX, 16));
+        assert!(parse(&["--accel", "kdtree", "--kdtree-binned-above", "lots"]).is_err());
         assert!(
             d.check_structure_options(&[AccelKind::KdTree], false)
                 .is_ok()
