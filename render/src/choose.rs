@@ -20,7 +20,8 @@
 //!    skipped without a probe; the octree's two-level preset, which refines
 //!    exactly such cells, takes its place as the first structure.
 //! 3. The first structure makes and times the probe: representative rays
-//!    from the caller (e.g. a low-resolution view with its shadow and
+//!    from the caller (e.g. [`view_probe`]: tiles of neighbouring pixels of
+//!    the render's view, as coherent as its own rays, with their shadow and
 //!    ambient-occlusion rays). Brute force is priced from a few of them.
 //! 4. The other candidates (the finer grid [`FINE_GRID_DENSITY`] on scenes
 //!    of at most [`FINE_GRID_MAX`] primitives, [`OctreeParams::two_level`],
@@ -51,7 +52,8 @@
 //! structure fast enough to finish its probe in a few scheduler time slices
 //! is judged on a few rays.
 //!
-//! Parameters, from `render choose-bench` (docs/choose-bench-2026-12-01.txt):
+//! Parameters, from `render choose-bench` (docs/choose-bench-2026-12-01.txt and
+//! docs/choose-bench-2026-12-01-quiet.txt):
 //! - on scenes of 19k primitives and more, the grid wins only where its
 //!   build dominates the total (small ray budgets), and there its cheapest
 //!   build (`m = 1`) wins or comes within 2%: the finer grid (`m = 2`, the
@@ -791,11 +793,62 @@ pub struct ProbeShape {
 /// The number of primary rays of [`view_probe`] for [`choose`].
 pub const PROBE_PRIMARIES: u32 = 1536;
 
+/// Side, in pixels, of the square tiles of a probe's primary rays.
+pub const PROBE_TILE: u32 = 4;
+
+/// About `primaries` primary rays through pixel centres of a `width ×
+/// height` view, in [`PROBE_TILE`]² tiles spread evenly over it, tile by tile
+/// and row by row within a tile. Every pixel once when `primaries` covers
+/// the view.
+fn tiled_primaries<T: Real>(
+    camera: &accel_core::scenes::Camera,
+    width: u32,
+    height: u32,
+    primaries: u32,
+) -> Vec<Ray<T>> {
+    let (width, height) = (width.max(1), height.max(1));
+    let tile = PROBE_TILE.min(width).min(height);
+    let (cols, rows) = (width.div_ceil(tile), height.div_ceil(tile));
+    let wanted = f64::from(primaries.max(1)) / f64::from(tile * tile);
+    let scale = (wanted / (f64::from(cols) * f64::from(rows)))
+        .sqrt()
+        .min(1.0);
+    let pick = |count: u32| ((f64::from(count) * scale).round() as u32).clamp(1, count);
+    let (tw, th) = (pick(cols), pick(rows));
+    // The k-th of n tiles chosen from `count`, centred in its share.
+    let chosen = |k: u32, n: u32, count: u32| {
+        ((f64::from(k) + 0.5) * f64::from(count) / f64::from(n)) as u32
+    };
+    let mut rays = Vec::with_capacity((tw * th * tile * tile) as usize);
+    for j in 0..th {
+        let y0 = chosen(j, th, rows) * tile;
+        for i in 0..tw {
+            let x0 = chosen(i, tw, cols) * tile;
+            for y in y0..(y0 + tile).min(height) {
+                for x in x0..(x0 + tile).min(width) {
+                    let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    rays.push(camera.ray_through(px, py, width, height));
+                }
+            }
+        }
+    }
+    rays
+}
+
 /// Probe rays for a render of `view` at `width × height` with `ao`
-/// occlusion rays per sample: primary rays of a coarser view (about
-/// `primaries` of them, [`PROBE_PRIMARIES`] for the chooser), and from each
-/// primary hit the shadow ray and `ao` occlusion rays the shader would
-/// trace, each after its primary ray (so that thinning keeps the mix).
+/// occlusion rays per sample: about `primaries` primary rays
+/// ([`PROBE_PRIMARIES`] for the chooser) in [`PROBE_TILE`]² tiles of
+/// neighbouring pixels of the full-resolution view, the tiles spread evenly
+/// over it, and from each primary hit the shadow ray and `ao` occlusion rays
+/// the shader would trace, each after its primary ray (so that thinning
+/// keeps the mix).
+///
+/// Tiles keep the coherence of the render's own rays: a structure whose
+/// speed depends on it is priced as it will run. Primary rays of a coarser
+/// view instead (one per 18×18 pixels for the chooser's final budget) priced
+/// the kD-tree, whose descent branches on every node, about 1.5× too slow
+/// (`render bench default --accel octree,kdtree` at 40×30: the kD-tree 0.95×
+/// the octree; at 800×600: 1.7×, with the same nodes and primitives per ray).
 ///
 /// # Errors
 /// A [`QueryError`] if a ray is not valid in this precision.
@@ -813,12 +866,7 @@ pub fn view_probe<T: Real>(
         ao,
         primaries,
     } = shape;
-    let scale = (f64::from(primaries) / (f64::from(width) * f64::from(height)))
-        .sqrt()
-        .min(1.0);
-    let w = ((f64::from(width) * scale).round() as u32).max(1);
-    let h = ((f64::from(height) * scale).round() as u32).max(1);
-    let primary: Vec<Ray<T>> = view.camera.rays(w, h);
+    let primary: Vec<Ray<T>> = tiled_primaries(&view.camera, width, height, primaries);
     let hits: Vec<_> = primary
         .par_iter()
         .map(|r| accel.intersect(r))
@@ -1132,5 +1180,37 @@ mod tests {
         })
         .unwrap_err();
         assert!(err.to_string().contains("not finite"), "{err}");
+    }
+
+    #[test]
+    fn probe_primaries_come_in_tiles_of_neighbouring_pixels() {
+        let camera = accel_core::scenes::GeneratedScene::Soup100k.camera();
+        let key = |r: &Ray<f64>| r.direction.to_array().map(f64::to_bits);
+        // Covering the view: every pixel once (a 10×7 view has partial tiles).
+        let mut all: Vec<_> = tiled_primaries::<f64>(&camera, 10, 7, 70)
+            .iter()
+            .map(key)
+            .collect();
+        let mut want: Vec<_> = camera.rays::<f64>(10, 7).iter().map(key).collect();
+        all.sort_unstable();
+        want.sort_unstable();
+        assert_eq!(all, want);
+        // The chooser's probe of an 800×600 render: about 1,536 rays, in
+        // runs of 16 whose directions differ by at most a few pixels.
+        let rays = tiled_primaries::<f64>(&camera, 800, 600, PROBE_PRIMARIES);
+        assert!((1300..=1800).contains(&rays.len()), "{}", rays.len());
+        let pixel = camera.ray_through::<f64>(400.5, 300.5, 800, 600).direction
+            - camera.ray_through::<f64>(401.5, 300.5, 800, 600).direction;
+        for t in rays.chunks(16) {
+            let spread = (t[0].direction - t[15].direction).length();
+            assert!(
+                spread < 6.0 * pixel.length(),
+                "{spread} against {}",
+                pixel.length()
+            );
+        }
+        // And the tiles are spread: the first and last are far apart.
+        let span = (rays[0].direction - rays[rays.len() - 1].direction).length();
+        assert!(span > 300.0 * pixel.length());
     }
 }
