@@ -8,6 +8,7 @@
 //! shows both builders choose the same planes, so the trees must be equal
 //! node for node; `KdTree::with_params_naive` exposes it to the tests.
 
+use crate::build::binned::{BoxSide, box_side, clip_to_node};
 use crate::build::sah::{Sah, Split, keep_cheaper};
 use crate::build::{Ctx, Out};
 use accel_core::{Aabb, PrimitiveSet, Real};
@@ -105,28 +106,17 @@ fn node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     above_box.min[k] = p;
     let (mut below, mut above) = (Vec::new(), Vec::new());
     for it in items {
-        let (lo, hi) = (it.b.min[k], it.b.max[k]);
-        if lo == p && hi == p {
-            if s.planar_left {
-                below.push(it);
-            } else {
-                above.push(it);
-            }
-        } else if hi <= p {
-            below.push(it);
-        } else if lo >= p {
-            above.push(it);
-        } else {
-            for (child_box, child) in [(&below_box, &mut below), (&above_box, &mut above)] {
-                let c = ctx
-                    .prims
-                    .clipped_bounds(it.prim as usize, child_box)
-                    .intersection(child_box);
-                if !c.is_empty() {
-                    child.push(Item {
-                        prim: it.prim,
-                        b: normalized(c),
-                    });
+        match box_side(&it.b, &s) {
+            BoxSide::Left => below.push(it),
+            BoxSide::Right => above.push(it),
+            BoxSide::Both => {
+                for (child_box, child) in [(&below_box, &mut below), (&above_box, &mut above)] {
+                    if let Some(c) = clip_to_node(ctx.prims, it.prim, child_box) {
+                        child.push(Item {
+                            prim: it.prim,
+                            b: normalized(c),
+                        });
+                    }
                 }
             }
         }

@@ -210,17 +210,7 @@ mod tests {
     }
 
     fn bits(r: &Ray<f32>) -> [u32; 8] {
-        [
-            r.origin.x,
-            r.origin.y,
-            r.origin.z,
-            r.direction.x,
-            r.direction.y,
-            r.direction.z,
-            r.t_min,
-            r.t_max,
-        ]
-        .map(f32::to_bits)
+        ray_values(r).map(f32::to_bits)
     }
 
     #[test]

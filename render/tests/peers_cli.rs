@@ -8,14 +8,18 @@ use serde_json::Value;
 
 const FAST: [&str; 6] = ["--width", "12", "--height", "8", "--min-time", "0"];
 
+/// Runs `args` with a tiny view, asserts success, and returns stdout.
+fn run_fast(dir: &std::path::Path, args: &[&str]) -> String {
+    let args: Vec<&str> = args.iter().chain(&FAST).copied().collect();
+    let o = run(dir, &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    stdout(&o)
+}
+
 #[test]
 fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     let dir = tempfile::tempdir().unwrap();
-    let mut args = vec!["peers", "default", "--json", "p.json"];
-    args.extend(FAST);
-    let o = run(dir.path(), &args);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let text = stdout(&o);
+    let text = run_fast(dir.path(), &["peers", "default", "--json", "p.json"]);
     for name in ["grid", "octree", "kdtree"] {
         assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
     }
@@ -55,28 +59,20 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
 #[test]
 fn peers_traces_a_ray_file_and_chosen_kinds() {
     let dir = tempfile::tempdir().unwrap();
-    let mut args = vec![
-        "bench",
-        "default",
-        "--write-rays",
-        "r.rays",
-        "--accel",
-        "grid",
-    ];
-    args.extend(FAST);
-    let o = run(dir.path(), &args);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let mut args = vec!["peers", "default", "--rays", "r.rays"];
-    args.extend(FAST);
-    let o = run(dir.path(), &args);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let text = stdout(&o);
+    run_fast(
+        dir.path(),
+        &[
+            "bench",
+            "default",
+            "--write-rays",
+            "r.rays",
+            "--accel",
+            "grid",
+        ],
+    );
+    let text = run_fast(dir.path(), &["peers", "default", "--rays", "r.rays"]);
     assert!(text.contains("rays (r.rays): file "), "{text}");
-    let mut args = vec!["peers", "default", "--kinds", "shadow"];
-    args.extend(FAST);
-    let o = run(dir.path(), &args);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let text = stdout(&o);
+    let text = run_fast(dir.path(), &["peers", "default", "--kinds", "shadow"]);
     assert!(text.contains(": shadow "), "{text}");
     assert!(!text.contains("primary"), "{text}");
 }

@@ -167,32 +167,63 @@ pub(crate) fn split_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut left = child(left_box, node.depth, node.prims.len() / 2);
     let mut right = child(right_box, node.depth, node.prims.len() / 2);
     for (&g, b) in node.prims.iter().zip(&node.boxes) {
-        let (lo, hi) = (b.min[k], b.max[k]);
-        if lo == hi && lo == p {
-            let side = if split.planar_left {
-                &mut left
-            } else {
-                &mut right
-            };
-            side.push(g, *b);
-        } else if hi <= p {
-            left.push(g, *b);
-        } else if lo >= p {
-            right.push(g, *b);
-        } else {
-            for side in [&mut left, &mut right] {
-                // Intersected again: a user's clipper cannot leak a box
-                // outside the node.
-                let c = prims
-                    .clipped_bounds(g as usize, &side.bounds)
-                    .intersection(&side.bounds);
-                if !c.is_empty() {
-                    side.push(g, c);
+        match box_side(b, split) {
+            BoxSide::Left => left.push(g, *b),
+            BoxSide::Right => right.push(g, *b),
+            BoxSide::Both => {
+                for side in [&mut left, &mut right] {
+                    if let Some(c) = clip_to_node(prims, g, &side.bounds) {
+                        side.push(g, c);
+                    }
                 }
             }
         }
     }
     (left, right)
+}
+
+/// Where a primitive with clipped bounds `b` goes at `split`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BoxSide {
+    Left,
+    Right,
+    /// Straddles the plane: clipped anew to each child.
+    Both,
+}
+
+/// The side of `split` a primitive's clipped box belongs to, as the sweep
+/// classifies its events: flat in the plane goes to the planar side, ending
+/// at or before it left, starting at or after it right.
+#[inline]
+pub(crate) fn box_side<T: Real>(b: &Aabb<T>, split: &Split<T>) -> BoxSide {
+    let (lo, hi) = (b.min[split.axis], b.max[split.axis]);
+    let p = split.pos;
+    if lo == hi && lo == p {
+        if split.planar_left {
+            BoxSide::Left
+        } else {
+            BoxSide::Right
+        }
+    } else if hi <= p {
+        BoxSide::Left
+    } else if lo >= p {
+        BoxSide::Right
+    } else {
+        BoxSide::Both
+    }
+}
+
+/// Primitive `g` clipped to a child's box, `None` where nothing of it lies
+/// inside. Intersected again: a user's clipper cannot leak a box outside the
+/// node.
+#[inline]
+pub(crate) fn clip_to_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+    g: u32,
+    child: &Aabb<T>,
+) -> Option<Aabb<T>> {
+    let c = prims.clipped_bounds(g as usize, child).intersection(child);
+    (!c.is_empty()).then_some(c)
 }
 
 fn child<T: Real>(bounds: Aabb<T>, depth: u32, capacity: usize) -> BinnedNode<T> {

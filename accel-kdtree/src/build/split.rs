@@ -11,6 +11,7 @@
 //! and merged into the child's lists. Nothing is re-sorted: the split is
 //! linear in the node's events plus `s log s` for `s` straddlers.
 
+use super::binned::clip_to_node;
 use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
 use super::sah::Split;
 use accel_core::{Aabb, PrimitiveSet, Real};
@@ -128,12 +129,7 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
                     (&left_box, &mut left_prims, &mut left_new),
                     (&right_box, &mut right_prims, &mut right_new),
                 ] {
-                    // Intersected again: a user's clipper cannot leak a box
-                    // outside the node into the events.
-                    let c = prims
-                        .clipped_bounds(g as usize, child_box)
-                        .intersection(child_box);
-                    if !c.is_empty() {
+                    if let Some(c) = clip_to_node(prims, g, child_box) {
                         push_events(new, child_prims.len() as u32, &c);
                         child_prims.push(g);
                     }
