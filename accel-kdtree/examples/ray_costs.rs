@@ -9,11 +9,13 @@ use accel_grid::Grid;
 use accel_kdtree::{KdTree, KdTreeParams};
 use std::time::Instant;
 
+/// Whether `ONLY` (if set) names this structure; others are not even built.
+fn wanted(name: &str) -> bool {
+    std::env::var("ONLY").map_or(true, |o| o == name)
+}
+
 #[inline(never)]
 fn costs<A: Accelerator<f32>>(name: &str, a: &A, rays: &[accel_core::Ray<f32>]) {
-    if std::env::var("ONLY").is_ok_and(|o| o != name) {
-        return;
-    }
     let mut c = TraversalCounters::default();
     let hits = rays
         .iter()
@@ -70,7 +72,7 @@ fn main() {
         let mesh = scene.mesh().cast::<f32>().expect("fits f32");
         let rays = scene.camera().rays::<f32>(256, 256);
         println!("{}", scene.name());
-        if scene != GeneratedScene::TeapotInStadium {
+        if scene != GeneratedScene::TeapotInStadium && wanted("grid") {
             costs("grid", &Grid::new(&mesh).unwrap(), &rays);
         }
         for (name, p) in [
@@ -87,7 +89,9 @@ fn main() {
             ("kdtree-best_traversal", KdTreeParams::best_traversal()),
             ("kdtree-env", env_params(mesh.triangle_count())),
         ] {
-            costs(name, &KdTree::with_params(&mesh, &p).unwrap(), &rays);
+            if wanted(name) {
+                costs(name, &KdTree::with_params(&mesh, &p).unwrap(), &rays);
+            }
         }
     }
 }

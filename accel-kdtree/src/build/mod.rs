@@ -4,6 +4,7 @@
 pub(crate) mod binned;
 pub(crate) mod events;
 pub(crate) mod sah;
+pub(crate) mod spares;
 pub(crate) mod split;
 
 use crate::node::KdNode;
@@ -12,6 +13,7 @@ use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bou
 use binned::{BinnedNode, best_binned_split, split_binned};
 use events::{Events, push_axis_events, sort_events};
 use sah::{Sah, Split, best_split};
+use spares::Spares;
 use split::{NodeWork, split_node};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -145,23 +147,25 @@ fn choose<T: Real, P: PrimitiveSet<T> + ?Sized>(
     (best.cost < sah.leaf_cost(n)).then_some(best)
 }
 
-/// Builds a subtree serially into `out`.
+/// Builds a subtree serially into `out`, reusing the lists of `spares`.
 fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
     node: NodeWork<T>,
     out: &mut Out<T>,
+    spares: &mut Spares<T>,
 ) {
     match choose(ctx, &node) {
         None => {
             ctx.count_leaf(node.prims.len());
             out.push_leaf(&node.prims);
+            spares.recycle(node);
         }
         Some(s) => {
             let at = out.push_inner(s.axis, s.pos);
-            let (below, above) = split_node(node, &s, ctx.prims);
-            build_serial(ctx, below, out);
+            let (below, above) = split_node(node, &s, ctx.prims, spares);
+            build_serial(ctx, below, out, spares);
             out.link_above(at);
-            build_serial(ctx, above, out);
+            build_serial(ctx, above, out, spares);
         }
     }
 }
@@ -173,7 +177,7 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> Piece<T> {
     if node.prims.len() < ctx.params.parallel_threshold.max(2) {
         let mut out = Out::new();
-        build_serial(ctx, node, &mut out);
+        build_serial(ctx, node, &mut out, &mut Spares::default());
         return Piece::Flat(out);
     }
     match choose(ctx, &node) {
@@ -184,7 +188,7 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
             Piece::Flat(out)
         }
         Some(s) => {
-            let (below, above) = split_node(node, &s, ctx.prims);
+            let (below, above) = split_node(node, &s, ctx.prims, &mut Spares::default());
             let (below, above) =
                 rayon::join(|| build_piece(ctx, below), || build_piece(ctx, above));
             Piece::Inner {

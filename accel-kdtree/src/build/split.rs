@@ -14,6 +14,7 @@
 use super::binned::clip_to_node;
 use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
 use super::sah::Split;
+use super::spares::Spares;
 use accel_core::{Aabb, PrimitiveSet, Real};
 
 /// A node under construction: its box, its primitives (global indices,
@@ -26,9 +27,11 @@ pub(crate) struct NodeWork<T> {
     pub(crate) depth: u32,
 }
 
+/// Sides in a destination word: one bit each, none for a straddler (whose
+/// events the partition drops), so each cursor advances by its bit alone.
 const LEFT: u32 = 1;
 const RIGHT: u32 = 2;
-const BOTH: u32 = 3;
+const BOTH: u32 = 0;
 /// Where the side sits in a primitive's destination word.
 const SIDE_SHIFT: u32 = 30;
 /// The child index below it.
@@ -40,26 +43,38 @@ const INDEX_MASK: u32 = (1 << SIDE_SHIFT) - 1;
 /// (they are clipped anew). Branch-free: every event is written to both
 /// outputs and each cursor advances only on its side, so the unpredictable
 /// side costs no mispredicted branch.
-fn partition<T: Real>(mut list: Vec<Event<T>>, dest: &[u32]) -> (Vec<Event<T>>, Vec<Event<T>>) {
+fn partition<T: Real>(
+    mut list: Vec<Event<T>>,
+    dest: &[u32],
+    spares: &mut Spares<T>,
+) -> (Vec<Event<T>>, Vec<Event<T>>) {
     let len = list.len();
-    let Some(&first) = list.first() else {
-        return (list, Vec::new());
-    };
-    let mut rights = vec![first; len];
+    let mut rights = spares.events();
+    rights.reserve(len);
+    let slots = &mut rights.spare_capacity_mut()[..len];
     let (mut wl, mut wr) = (0, 0);
     for r in 0..len {
         let e = list[r];
         let d = dest[e.local()];
         let moved = e.with_local(d & INDEX_MASK);
-        let side = d >> SIDE_SHIFT;
-        // wl <= r: the slot written was already read.
-        list[wl] = moved;
-        wl += usize::from(side == LEFT);
-        rights[wr] = moved;
-        wr += usize::from(side == RIGHT);
+        debug_assert!(wl <= r && wr <= r);
+        // SAFETY: `wl` and `wr` each advance at most once per iteration, so
+        // both are at most `r < len`, the length of `list` and of `slots`.
+        // (The slot `list[wl]` was already read.) Unchecked writes save the
+        // two bounds checks of the partition's inner loop, the hottest loop of
+        // the build.
+        unsafe {
+            *list.get_unchecked_mut(wl) = moved;
+            slots.get_unchecked_mut(wr).write(moved);
+        }
+        wl += ((d >> SIDE_SHIFT) & LEFT) as usize;
+        wr += (d >> (SIDE_SHIFT + 1)) as usize;
     }
     list.truncate(wl);
-    rights.truncate(wr);
+    // SAFETY: the loop wrote `slots[..=wr']` for every value `wr'` the cursor
+    // took, so the first `wr` elements are initialized (`Event` is `Copy`:
+    // nothing to drop), and `wr <= len <= capacity`.
+    unsafe { rights.set_len(wr) };
     (list, rights)
 }
 
@@ -68,6 +83,7 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     node: NodeWork<T>,
     split: &Split<T>,
     prims: &P,
+    spares: &mut Spares<T>,
 ) -> (NodeWork<T>, NodeWork<T>) {
     let NodeWork {
         bounds,
@@ -80,7 +96,8 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
 
     // One word per primitive: its side in the top two bits, its index in its
     // child below (one random access per event in the partition).
-    let mut dest = vec![BOTH << SIDE_SHIFT; n];
+    let mut dest = spares.words();
+    dest.resize(n, BOTH << SIDE_SHIFT);
     for e in &events[k] {
         let d = &mut dest[e.local()];
         match e.kind() {
@@ -110,10 +127,12 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     right_box.min[k] = p;
 
     // Renumber; clip the straddlers to each child (perfect splits).
-    let mut left_prims = Vec::with_capacity(n);
-    let mut right_prims = Vec::with_capacity(n);
-    let mut left_new: Events<T> = Default::default();
-    let mut right_new: Events<T> = Default::default();
+    let mut left_prims = spares.words();
+    left_prims.reserve(n);
+    let mut right_prims = spares.words();
+    right_prims.reserve(n);
+    let mut left_new: Events<T> = [(); 3].map(|()| spares.events());
+    let mut right_new: Events<T> = [(); 3].map(|()| spares.events());
     for (d, &g) in dest.iter_mut().zip(&list) {
         match *d >> SIDE_SHIFT {
             LEFT => {
@@ -137,14 +156,14 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
         }
     }
-    drop(list);
+    spares.give_words(list);
 
     let n_left = left_prims.len();
     let n_right = right_prims.len();
     let mut left_events: Events<T> = Default::default();
     let mut right_events: Events<T> = Default::default();
     for (a, list) in events.into_iter().enumerate() {
-        let (mut lefts, mut rights) = partition(list, &dest);
+        let (mut lefts, mut rights) = partition(list, &dest, spares);
         for (dst, new) in [
             (&mut lefts, &mut left_new[a]),
             (&mut rights, &mut right_new[a]),
@@ -152,9 +171,13 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             sort_events(new);
             super::events::merge_into(dst, new);
         }
+        for new in [&mut left_new[a], &mut right_new[a]] {
+            spares.give_events(core::mem::take(new));
+        }
         left_events[a] = lefts;
         right_events[a] = rights;
     }
+    spares.give_words(dest);
     debug_assert!(left_events.iter().all(|l| l.len() >= n_left));
     debug_assert!(right_events.iter().all(|l| l.len() >= n_right));
     (
