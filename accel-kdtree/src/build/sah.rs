@@ -135,20 +135,19 @@ pub(crate) fn sweep_axis<T: Real>(
     let (mut best_cost, mut best_at, mut best_left) = (f64::INFINITY, usize::MAX, true);
     let (lo, hi) = (sah.min[k], sah.max[k]);
     let (mut nl, mut nr) = (0usize, n);
+    let len = events.len();
     let mut i = 0;
-    while let Some(first) = events.get(i) {
-        let pos = first.pos;
+    while i < len {
+        let pos = events[i].pos;
         let at = i;
-        // Count this plane's ends, planars and starts (they come in that order).
-        let mut counts = [0usize; 3];
-        for e in &events[i..] {
-            if e.pos != pos {
-                break;
-            }
-            counts[e.kind() as usize] += 1;
+        // Count this plane's ends, planars and starts (they come in that
+        // order). Four counters, so the kind indexes them without a check.
+        let mut counts = [0usize; 4];
+        while i < len && events[i].pos == pos {
+            counts[(events[i].kind() & 3) as usize] += 1;
             i += 1;
         }
-        let [ends, planar, starts] = counts;
+        let [ends, planar, starts, _] = counts;
         nr -= planar + ends;
         let p = pos.to_f64();
         if lo < p && p < hi {
