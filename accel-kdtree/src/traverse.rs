@@ -17,7 +17,8 @@ use crate::build::decode_split;
 use crate::tree::KdTree;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
-    TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
+    TraversalCounters, TraversalRay, Vec3, nearer, region_matches, region_search_box,
+    validate_region,
 };
 
 /// Traversal stack entries: at most one per level.
@@ -134,20 +135,28 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         counter: &mut C,
     ) {
         let ray = tr.ray();
-        let (o, d) = (ray.origin, ray.direction);
-        let inv = tr.prepared.inv_dir;
+        // Per-axis values as arrays of four, indexed by `axis & 3`: one load
+        // each, where `Vec3`'s checked index costs a match.
+        let lanes = |v: Vec3<T>| [v.x, v.y, v.z, T::ZERO];
+        let (o, d, inv) = (
+            lanes(ray.origin),
+            lanes(ray.direction),
+            lanes(tr.prepared.inv_dir),
+        );
+        // The parameter after which nodes are skipped; it only moves at leaves.
+        let mut cutoff = v.cutoff();
         let mut stack = [(0u32, T::ZERO, T::ZERO); STACK];
         let mut sp = 0;
         let (mut idx, mut t0, mut t1) = (0usize, tr.t_start, tr.t_end);
         loop {
-            if t0 <= v.cutoff() {
+            if t0 <= cutoff {
                 let node = &self.nodes[idx];
                 counter.node();
                 if !node.is_leaf() {
                     let axis = node.axis();
                     let s = decode_split(node.split_word(), &self.splits);
-                    let (da, oa) = (d[axis], o[axis]);
-                    let (lo, hi) = band(tr, inv[axis], axis, s, oa);
+                    let (da, oa) = (d[axis & 3], o[axis & 3]);
+                    let (lo, hi) = band(tr, inv[axis & 3], axis, s, oa);
                     // Below first when going up, or parallel on the low side
                     // (bitwise, not short-circuit: no branch to mispredict).
                     let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));
@@ -157,8 +166,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     } else {
                         (above, below)
                     };
-                    let near_t1 = t1.min(hi);
-                    let far_t0 = t0.max(lo);
+                    // Plain selects (no NaN here: finite reciprocal and
+                    // plane), which compile to single min/max instructions.
+                    let near_t1 = if hi < t1 { hi } else { t1 };
+                    let far_t0 = if lo > t0 { lo } else { t0 };
                     // The far child waits on the stack when the beam reaches
                     // it (written always, kept only then: sp < STACK here,
                     // since an inner node lies above the depth limit).
@@ -171,6 +182,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     }
                 } else if v.leaf(self.leaf_primitives(node), counter) {
                     return;
+                } else {
+                    cutoff = v.cutoff();
                 }
             }
             if sp == 0 {
