@@ -1,6 +1,7 @@
-//! Builds the generated terrain of N triangles once, on one thread unless told (for
-//! profilers), optionally with the binned SAH above a node size and a bin count:
-//! `cargo run --release -p accel-kdtree --example build_profile -- N [BINNED_ABOVE] [BINS]`;
+//! Builds the generated terrain of N triangles (or the glTF file given instead
+//! of N) once, on one thread unless told (for profilers), optionally with the
+//! binned SAH above a node size and a bin count:
+//! `cargo run --release -p accel-kdtree --example build_profile -- N|FILE.glb [BINNED_ABOVE] [BINS]`;
 //! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `THREADS=n`
 //! builds on `n` threads.
 
@@ -9,11 +10,19 @@ use accel_core::scenes::terrain;
 use accel_kdtree::{KdTree, KdTreeParams};
 
 fn main() {
-    let n: usize = std::env::args()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(100_000);
-    let mesh = terrain(n, 0x7E).cast::<f32>().expect("fits f32");
+    let first = std::env::args().nth(1).unwrap_or_else(|| "100000".into());
+    let mesh = match first.parse::<usize>() {
+        Ok(n) => terrain(n, 0x7E),
+        Err(_) => match accel_core::gltf_scene::load(std::path::Path::new(&first)) {
+            Ok(scene) => scene.mesh,
+            Err(e) => {
+                eprintln!("{first}: {e}");
+                std::process::exit(2);
+            }
+        },
+    }
+    .cast::<f32>()
+    .expect("fits f32");
     let threads = std::env::var("THREADS")
         .ok()
         .and_then(|s| s.parse().ok())
