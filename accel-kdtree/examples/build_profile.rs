@@ -1,18 +1,22 @@
-//! Builds the generated terrain of N triangles (or the glTF file given instead
-//! of N) once, on one thread unless told (for profilers), optionally with the
+//! Builds the generated terrain of N triangles (or the generated scene or glTF
+//! file named instead of N) once, on one thread unless told (for profilers), optionally with the
 //! binned SAH above a node size and a bin count:
-//! `cargo run --release -p accel-kdtree --example build_profile -- N|FILE.glb [BINNED_ABOVE] [BINS]`;
+//! `cargo run --release -p accel-kdtree --example build_profile -- N|SCENE|FILE.glb [BINNED_ABOVE] [BINS]`;
 //! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `THREADS=n`
 //! builds on `n` threads.
 
 use accel_core::Accelerator;
-use accel_core::scenes::terrain;
+use accel_core::scenes::{GeneratedScene, terrain};
 use accel_kdtree::{KdTree, KdTreeParams};
 
 fn main() {
     let first = std::env::args().nth(1).unwrap_or_else(|| "100000".into());
     let mesh = match first.parse::<usize>() {
         Ok(n) => terrain(n, 0x7E),
+        Err(_) if GeneratedScene::ALL.iter().any(|s| s.name() == first) => {
+            let scene = GeneratedScene::ALL.into_iter().find(|s| s.name() == first);
+            scene.expect("listed").mesh()
+        }
         Err(_) => match accel_core::gltf_scene::load(std::path::Path::new(&first)) {
             Ok(scene) => scene.mesh,
             Err(e) => {

@@ -276,6 +276,15 @@ pub struct AccelResult {
     pub nodes: u64,
     /// Primitive references.
     pub references: u64,
+    /// Cells or leaves that can hold references.
+    pub leaves: u64,
+    /// Of those, the ones holding none.
+    pub empty_leaves: u64,
+    /// The most references in one cell or leaf.
+    pub max_leaf_references: u64,
+    /// Structure-specific figures: a grid's resolution, a tree's depth and
+    /// SAH cost ([`accel_core::AccelStats::extra`]).
+    pub extra: std::collections::BTreeMap<&'static str, f64>,
     /// One entry per ray set.
     pub sets: Vec<SetResult>,
 }
@@ -557,6 +566,10 @@ pub fn measure_accel<T: Real, P: PrimitiveSet<T> + ?Sized>(
         bytes: stats.bytes as u64,
         nodes: stats.nodes as u64,
         references: stats.references as u64,
+        leaves: stats.leaves as u64,
+        empty_leaves: stats.empty_leaves as u64,
+        max_leaf_references: stats.max_leaf_references as u64,
+        extra: stats.extra.iter().copied().collect(),
         sets,
     })
 }

@@ -63,6 +63,30 @@ fn bench_reports_every_accelerator_as_a_table_and_json() {
     );
     for a in accels {
         assert!(a["bytes"].as_u64().is_some() && a["build_ms"].as_f64().is_some());
+        // Shape statistics: consistent with each other.
+        let count = |k: &str| a[k].as_u64().unwrap_or_else(|| panic!("{k} in {a}"));
+        assert!(count("empty_leaves") <= count("leaves"), "{a}");
+        assert!(count("max_leaf_references") <= count("references"), "{a}");
+        assert!(count("max_leaf_references") > 0, "{a}");
+        let extra = &a["extra"];
+        match a["accel"].as_str().unwrap() {
+            "grid" => {
+                let cells: f64 = ["nx", "ny", "nz"]
+                    .iter()
+                    .map(|k| extra[k].as_f64().unwrap())
+                    .product();
+                assert_eq!(cells as u64, count("leaves"), "{a}");
+            }
+            "kdtree" => {
+                let depth = extra["depth"].as_f64().unwrap();
+                assert!(
+                    depth >= 1.0 && depth <= extra["depth_limit"].as_f64().unwrap(),
+                    "{a}"
+                );
+                assert!(extra["sah_cost"].as_f64().unwrap() > 0.0, "{a}");
+            }
+            _ => {}
+        }
         for kind in ["primary", "shadow", "diffuse"] {
             let s = set(a, kind);
             assert!(s["mrays_one_thread"].as_f64().unwrap() > 0.0);
