@@ -2,8 +2,8 @@
 //! file named instead of N) once, on one thread unless told (for profilers), optionally with the
 //! binned SAH above a node size and a bin count:
 //! `cargo run --release -p accel-kdtree --example build_profile -- N|SCENE|FILE.glb [BINNED_ABOVE] [BINS]`;
-//! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `THREADS=n`
-//! builds on `n` threads.
+//! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `KD_MAX_DEPTH=d`
+//! sets the depth limit, `THREADS=n` builds on `n` threads.
 
 use accel_core::Accelerator;
 use accel_core::scenes::{GeneratedScene, terrain};
@@ -42,6 +42,12 @@ fn main() {
         Ok("pbrt") => KdTreeParams::pbrt(),
         _ => KdTreeParams::default(),
     };
+    if let Some(depth) = std::env::var("KD_MAX_DEPTH")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        params.max_depth = Some(depth);
+    }
     if let Some(above) = std::env::args().nth(2).and_then(|s| s.parse().ok()) {
         params.binned_above = above;
     }
