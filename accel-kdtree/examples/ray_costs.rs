@@ -1,10 +1,11 @@
 //! Mean nodes visited and primitives tested per camera ray, kd-tree beside
 //! the uniform grid, on each generated scene (for tuning and profiling):
-//! `cargo run --release -p accel-kdtree --example ray_costs [scene-name]`
+//! `cargo run --release -p accel-kdtree --example ray_costs [scene-name|FILE.glb]`
+//! (a glTF file is framed from the same side as the generated meshes)
 //! (`ONLY=kdtree-default` traces one structure, e.g. under callgrind).
 
-use accel_core::scenes::GeneratedScene;
-use accel_core::{Accelerator, TraversalCounters};
+use accel_core::scenes::{Camera, GeneratedScene};
+use accel_core::{Accelerator, TraversalCounters, TriangleMesh, Vec3};
 use accel_grid::Grid;
 use accel_kdtree::{KdTree, KdTreeParams};
 use std::time::Instant;
@@ -65,6 +66,23 @@ fn env_params(n: usize) -> KdTreeParams {
 
 fn main() {
     let only = std::env::args().nth(1);
+    if let Some(path) = only
+        .as_deref()
+        .filter(|o| o.ends_with(".glb") || o.ends_with(".gltf"))
+    {
+        let mesh = match accel_core::gltf_scene::load(std::path::Path::new(path)) {
+            Ok(scene) => scene.mesh,
+            Err(e) => {
+                eprintln!("{path}: {e}");
+                std::process::exit(2);
+            }
+        };
+        let camera = Camera::frame(&mesh.bounds(), Vec3::new(1.0, -1.6, 0.9));
+        let mesh = mesh.cast::<f32>().expect("fits f32");
+        println!("{path}");
+        structures(&mesh, &camera.rays::<f32>(256, 256), true);
+        return;
+    }
     for scene in GeneratedScene::ALL {
         if only.as_deref().is_some_and(|o| o != scene.name()) {
             continue;
@@ -72,26 +90,31 @@ fn main() {
         let mesh = scene.mesh().cast::<f32>().expect("fits f32");
         let rays = scene.camera().rays::<f32>(256, 256);
         println!("{}", scene.name());
-        if scene != GeneratedScene::TeapotInStadium && wanted("grid") {
-            costs("grid", &Grid::new(&mesh).unwrap(), &rays);
-        }
-        for (name, p) in [
-            ("kdtree-default", KdTreeParams::default()),
-            (
-                "kdtree-exact",
-                KdTreeParams {
-                    binned_above: usize::MAX,
-                    ..KdTreeParams::default()
-                },
-            ),
-            ("kdtree-pbrt", KdTreeParams::pbrt()),
-            ("kdtree-fast_build", KdTreeParams::fast_build()),
-            ("kdtree-best_traversal", KdTreeParams::best_traversal()),
-            ("kdtree-env", env_params(mesh.triangle_count())),
-        ] {
-            if wanted(name) {
-                costs(name, &KdTree::with_params(&mesh, &p).unwrap(), &rays);
-            }
+        structures(&mesh, &rays, scene != GeneratedScene::TeapotInStadium);
+    }
+}
+
+/// Traces `rays` through the grid (when `grid`) and each kD-tree setting.
+fn structures(mesh: &TriangleMesh<f32>, rays: &[accel_core::Ray<f32>], grid: bool) {
+    if grid && wanted("grid") {
+        costs("grid", &Grid::new(mesh).unwrap(), rays);
+    }
+    for (name, p) in [
+        ("kdtree-default", KdTreeParams::default()),
+        (
+            "kdtree-exact",
+            KdTreeParams {
+                binned_above: usize::MAX,
+                ..KdTreeParams::default()
+            },
+        ),
+        ("kdtree-pbrt", KdTreeParams::pbrt()),
+        ("kdtree-fast_build", KdTreeParams::fast_build()),
+        ("kdtree-best_traversal", KdTreeParams::best_traversal()),
+        ("kdtree-env", env_params(mesh.triangle_count())),
+    ] {
+        if wanted(name) {
+            costs(name, &KdTree::with_params(mesh, &p).unwrap(), rays);
         }
     }
 }
