@@ -130,7 +130,7 @@ impl CellLists {
         };
         // slots[c + 1] counts cell c in pass 1, holds its start before pass 2 and
         // its end after it; slots[0] stays 0. The array becomes the offsets.
-        let slots: Vec<AtomicU32> = (0..=cell_count).map(|_| AtomicU32::new(0)).collect();
+        let slots = zeroed_atomics(cell_count + 1);
         let cells = &slots[1..];
         let recorded = if u32::try_from(cell_count).is_ok() {
             match record_cells(len, &id, budget, visitor, cells) {
@@ -151,20 +151,14 @@ impl CellLists {
         };
 
         let mut slots: Vec<u32> = slots.into_iter().map(AtomicU32::into_inner).collect();
-        let mut running: u64 = 0;
-        for slot in &mut slots[1..] {
-            let count = u64::from(*slot);
-            // Safe to truncate: checked against u32::MAX below before use.
-            *slot = running as u32;
-            running += count;
-        }
+        let running = exclusive_prefix_sum(&mut slots[1..]);
         if running > budget {
             return Err(over_budget(running));
         }
         let total = running as usize;
 
         let slots: Vec<AtomicU32> = slots.into_iter().map(AtomicU32::new).collect();
-        let refs: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+        let refs = zeroed_atomics(total);
         let cells = &slots[1..];
         let place = |item: u32, c: usize| {
             let at = cells[c].fetch_add(1, Ordering::Relaxed);
@@ -243,18 +237,60 @@ impl CellLists {
     /// Cells with no reference.
     #[must_use]
     pub fn empty_cells(&self) -> usize {
-        self.offsets.windows(2).filter(|w| w[0] == w[1]).count()
+        self.offsets.par_windows(2).filter(|w| w[0] == w[1]).count()
     }
 
     /// The most references in one cell.
     #[must_use]
     pub fn max_cell_len(&self) -> usize {
         self.offsets
-            .windows(2)
+            .par_windows(2)
             .map(|w| (w[1] - w[0]) as usize)
             .max()
             .unwrap_or(0)
     }
+}
+
+/// Cells per parallel chunk of the build's linear passes over cells.
+const CELLS_PER_CHUNK: usize = 1 << 16;
+
+/// `len` zeroed atomics, written in parallel: a grid's offsets are its
+/// largest array (8 million cells for the 1M terrain), and serial passes
+/// over them held back the build's scaling with threads.
+fn zeroed_atomics(len: usize) -> Vec<AtomicU32> {
+    (0..len)
+        .into_par_iter()
+        .with_min_len(CELLS_PER_CHUNK)
+        .map(|_| AtomicU32::new(0))
+        .collect()
+}
+
+/// Replaces each count by the sum of the counts before it and returns the
+/// total, in `u64`: chunk totals in parallel, a short serial scan over them,
+/// then each chunk's running sums in parallel. Entries are truncated to
+/// `u32`; the caller checks the total before using them.
+fn exclusive_prefix_sum(counts: &mut [u32]) -> u64 {
+    let chunk_totals: Vec<u64> = counts
+        .par_chunks(CELLS_PER_CHUNK)
+        .map(|chunk| chunk.iter().map(|&c| u64::from(c)).sum())
+        .collect();
+    let mut starts = Vec::with_capacity(chunk_totals.len());
+    let mut total = 0u64;
+    for t in chunk_totals {
+        starts.push(total);
+        total += t;
+    }
+    counts
+        .par_chunks_mut(CELLS_PER_CHUNK)
+        .zip(starts)
+        .for_each(|(chunk, mut running)| {
+            for c in chunk {
+                let count = u64::from(*c);
+                *c = running as u32;
+                running += count;
+            }
+        });
+    total
 }
 
 /// Sorts every cell's references, in parallel over groups of cells.
@@ -448,5 +484,23 @@ mod tests {
         assert_eq!(lists.empty_cells(), 3);
         assert!(lists.cell(2).is_empty());
         assert_eq!(lists.max_cell_len(), 0);
+    }
+
+    #[test]
+    fn prefix_sum_across_chunks_matches_a_serial_scan() {
+        // Several chunks, a partial last one, and a total past u32::MAX.
+        let len = 3 * CELLS_PER_CHUNK + 17;
+        let counts: Vec<u32> = (0..len)
+            .map(|i| if i == 5 { u32::MAX } else { (i % 7) as u32 })
+            .collect();
+        let mut got = counts.clone();
+        let total = exclusive_prefix_sum(&mut got);
+        let mut running = 0u64;
+        for (i, &c) in counts.iter().enumerate() {
+            assert_eq!(got[i], running as u32, "entry {i}");
+            running += u64::from(c);
+        }
+        assert_eq!(total, running);
+        assert!(total > u64::from(u32::MAX));
     }
 }
