@@ -308,7 +308,7 @@ mod tests {
                     let pos = if i % 5 == 0 {
                         fixed[(i as usize * 7) % fixed.len()]
                     } else {
-                        1.0 + spread * ((i * 2_654_435_761) % 1000) as f32
+                        1.0 + spread * (i.wrapping_mul(2_654_435_761) % 1000) as f32
                     };
                     Event::new(pos, i, (i * 7) % 3)
                 })
