@@ -291,6 +291,12 @@ impl GeneratedScene {
         Self::TeapotInStadium,
     ];
 
+    /// The scene called `name` (as [`GeneratedScene::name`] spells it).
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+
     /// A short name for reports.
     #[must_use]
     pub const fn name(self) -> &'static str {
@@ -444,6 +450,16 @@ pub fn random_rays<T: Real>(b: &Aabb<f64>, n: usize, seed: u64) -> Vec<Ray<T>> {
 mod tests {
     use super::*;
     use crate::{Accelerator, BruteForce, PrimitiveSet};
+
+    #[test]
+    fn every_scene_is_found_by_its_name_and_nothing_else_is() {
+        for scene in GeneratedScene::ALL {
+            assert_eq!(GeneratedScene::from_name(scene.name()), Some(scene));
+        }
+        for other in ["", "default", "Sphere_100k", "soup_100k ", "teapot"] {
+            assert_eq!(GeneratedScene::from_name(other), None, "{other:?}");
+        }
+    }
 
     /// Each edge of a closed mesh is used by exactly two triangles, once in each direction.
     fn assert_closed(m: &TriangleMesh<f64>) {

@@ -15,7 +15,7 @@ fn main() {
     let name = args.get(1).map_or("sphere_100k", String::as_str);
     let kind = args.get(2).map_or("camera", String::as_str);
     let count: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(65_536);
-    let Some(scene) = GeneratedScene::ALL.into_iter().find(|s| s.name() == name) else {
+    let Some(scene) = GeneratedScene::from_name(name) else {
         eprintln!(
             "unknown scene {name}; expected one of sphere_100k, soup_100k, terrain_1m, teapot_in_stadium"
         );

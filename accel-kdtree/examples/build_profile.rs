@@ -11,13 +11,10 @@ use accel_kdtree::{KdTree, KdTreeParams};
 
 fn main() {
     let first = std::env::args().nth(1).unwrap_or_else(|| "100000".into());
-    let mesh = match first.parse::<usize>() {
-        Ok(n) => terrain(n, 0x7E),
-        Err(_) if GeneratedScene::ALL.iter().any(|s| s.name() == first) => {
-            let scene = GeneratedScene::ALL.into_iter().find(|s| s.name() == first);
-            scene.expect("listed").mesh()
-        }
-        Err(_) => match accel_core::gltf_scene::load(std::path::Path::new(&first)) {
+    let mesh = match (first.parse::<usize>(), GeneratedScene::from_name(&first)) {
+        (Ok(n), _) => terrain(n, 0x7E),
+        (Err(_), Some(scene)) => scene.mesh(),
+        (Err(_), None) => match accel_core::gltf_scene::load(std::path::Path::new(&first)) {
             Ok(scene) => scene.mesh,
             Err(e) => {
                 eprintln!("{first}: {e}");

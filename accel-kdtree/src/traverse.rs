@@ -166,8 +166,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     } else {
                         (above, below)
                     };
-                    // Plain selects (no NaN here: finite reciprocal and
-                    // plane), which compile to single min/max instructions.
+                    // Plain selects, which compile to single min/max
+                    // instructions. A band end widened from an infinite
+                    // product (∞ − ∞) is NaN; the select then keeps the
+                    // node's own parameter, as `min`/`max` did.
                     let near_t1 = if hi < t1 { hi } else { t1 };
                     let far_t0 = if lo > t0 { lo } else { t0 };
                     // The far child waits on the stack when the beam reaches

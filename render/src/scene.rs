@@ -73,7 +73,7 @@ impl SceneSource {
         if arg == DEFAULT_SCENE {
             return Ok(Self::Default);
         }
-        if let Some(g) = GeneratedScene::ALL.into_iter().find(|g| g.name() == arg) {
+        if let Some(g) = GeneratedScene::from_name(arg) {
             return Ok(Self::Generated(g));
         }
         let path = PathBuf::from(arg);

@@ -192,7 +192,7 @@ fn sort_f32_events<T: Real>(list: &mut [Event<T>]) {
         .iter()
         .map(|e| {
             let bits = ordered_bits(e.pos.to_bits_u64() as u32);
-            let low = (e.kind() << 30) | (e.word >> 2);
+            let low = (e.kind() << 30) | e.local() as u32;
             (u64::from(bits) << 32) | u64::from(low)
         })
         .collect();
