@@ -56,6 +56,7 @@ mod robust;
 pub mod spawn;
 mod sphere;
 pub mod triangle;
+mod triangle_box;
 mod vec3;
 
 #[cfg(feature = "gltf")]

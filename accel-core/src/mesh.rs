@@ -1,6 +1,8 @@
 //! Indexed triangle meshes: shared vertices, triangles as index triples.
 
-use crate::triangle::{clip_triangle_bounds, intersect_triangle, triangle_overlaps_box};
+use crate::triangle::{
+    clip_triangle_bounds, intersect_triangle, triangle_overlaps_box, triangle_overlaps_boxes,
+};
 use crate::{Aabb, PreparedRay, PrimHit, PrimitiveSet, Real, Vec3};
 
 /// Why a mesh was refused.
@@ -175,6 +177,10 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         let [p0, p1, p2] = self.triangle(i);
         triangle_overlaps_box(p0, p1, p2, b)
+    }
+
+    fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
+        triangle_overlaps_boxes(self.triangle(i), boxes, out);
     }
 
     #[inline]

@@ -203,6 +203,11 @@ impl<T: Real> PrimitiveSet<T> for MollerTrumboreMesh<'_, T> {
     }
 
     #[inline]
+    fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
+        self.mesh.overlaps_boxes(i, boxes, out);
+    }
+
+    #[inline]
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.mesh.clipped_bounds(i, b)
     }

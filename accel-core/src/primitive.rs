@@ -37,6 +37,16 @@ pub trait Primitive<T: Real>: Sync {
         self.bounds().overlaps(b)
     }
 
+    /// [`Primitive::overlaps_box`] for each of `boxes`, written to the same
+    /// place in `out` (as long as `boxes`). A grid asks about all the cells
+    /// a primitive's bounds cover at once, so that a shape can prepare its
+    /// test once ([`crate::Triangle`] does); the default asks box by box.
+    fn overlaps_boxes(&self, boxes: &[Aabb<T>], out: &mut [bool]) {
+        for (b, o) in boxes.iter().zip(out) {
+            *o = self.overlaps_box(b);
+        }
+    }
+
     /// A box holding every point of the primitive that lies in the closed box
     /// `b`, itself inside `b`; empty (see [`Aabb::is_empty`]) when the
     /// primitive surely misses `b`. kD-trees use it for "perfect splits"
@@ -74,6 +84,17 @@ pub trait PrimitiveSet<T: Real>: Sync {
     /// Whether primitive `i` meets the closed box `b` (conservatively).
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool;
 
+    /// [`PrimitiveSet::overlaps_box`] of primitive `i` for each of `boxes`,
+    /// written to the same place in `out` (as long as `boxes`), as
+    /// [`Primitive::overlaps_boxes`]: one call per primitive lets a set
+    /// prepare its test once ([`crate::TriangleMesh`] does). The default asks
+    /// box by box.
+    fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
+        for (b, o) in boxes.iter().zip(out) {
+            *o = self.overlaps_box(i, b);
+        }
+    }
+
     /// A box holding every point of primitive `i` inside the closed box `b`,
     /// itself inside `b` (empty when the primitive surely misses `b`), as
     /// [`Primitive::clipped_bounds`]. The default is `bounds(i) ∩ b`.
@@ -100,6 +121,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
         self[i].overlaps_box(b)
     }
     #[inline]
+    fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
+        self[i].overlaps_boxes(boxes, out);
+    }
+    #[inline]
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self[i].clipped_bounds(b)
     }
@@ -121,6 +146,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
     #[inline]
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         self[i].overlaps_box(b)
+    }
+    #[inline]
+    fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
+        self[i].overlaps_boxes(boxes, out);
     }
     #[inline]
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {

@@ -1,6 +1,7 @@
 //! Triangles: the watertight ray test (Woop, Benthin & Wald 2013) and the
 //! separating-axis triangle–box test (Akenine-Möller 2001).
 
+pub use crate::triangle_box::{TriangleBoxTest, triangle_overlaps_boxes};
 use crate::{Aabb, PreparedRay, PrimHit, Primitive, Real, Vec3};
 
 /// The watertight ray–triangle test of Woop, Benthin & Wald (JCGT 2013).
@@ -124,70 +125,14 @@ fn sure_sign(p: f64, q: f64) -> f64 {
 /// Akenine-Möller ("Fast 3D triangle-box overlap testing", 2001).
 ///
 /// Conservative: it never answers `false` for a triangle that truly meets the
-/// box. Each separation must exceed a rounding bound (`gamma(32)` of the
-/// magnitudes involved) before it counts, and the arithmetic runs in
-/// [`Real::Wide`] so that `f32` scenes at 1e±20 neither overflow nor underflow.
-/// Degenerate triangles (segments, points) are tested as what they are.
+/// box (see [`TriangleBoxTest`], which prepares a triangle once for many
+/// boxes). Degenerate triangles (segments, points) are tested as what they
+/// are.
 #[must_use]
 pub fn triangle_overlaps_box<T: Real>(p0: Vec3<T>, p1: Vec3<T>, p2: Vec3<T>, b: &Aabb<T>) -> bool {
-    if b.is_empty() {
-        return false;
-    }
-    // The three box-face axes: exact comparisons of the triangle's bounds.
-    let tb = Aabb::from_point(p0).union_point(p1).union_point(p2);
-    if !tb.overlaps(b) {
-        return false;
-    }
-    if b.contains(&tb) {
-        return true;
-    }
-    let w = |v: Vec3<T>| v.map(T::to_wide);
-    // Work relative to the box's lower corner: differences of nearby values are
-    // exact or nearly so, and the box centre is exact in these coordinates, so
-    // the rounding is relative to the box and triangle sizes, not to how far
-    // from the coordinate origin they sit.
-    let lo = w(b.min);
-    let h = (w(b.max) - lo) * <T::Wide as Real>::HALF;
-    let q = [w(p0) - lo, w(p1) - lo, w(p2) - lo];
-    let v = [q[0] - h, q[1] - h, q[2] - h];
-    // Magnitudes the rounding errors are relative to, per axis.
-    let mag = q[0].abs().max(q[1].abs()).max(q[2].abs()) + h + h;
-    let slack = <T::Wide as Real>::gamma(32);
-
-    let separated = |axis: Vec3<T::Wide>| -> bool {
-        let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
-        let pmin = p[0].min(p[1]).min(p[2]);
-        let pmax = p[0].max(p[1]).max(p[2]);
-        let abs_axis = axis.abs();
-        let r = abs_axis.dot(h);
-        let err = slack * abs_axis.dot(mag);
-        pmin > r + err || pmax < -(r + err)
-    };
-
-    let e = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    let zero = <T::Wide as Real>::ZERO;
-    for edge in e {
-        // unit_x × edge, unit_y × edge, unit_z × edge.
-        let axes = [
-            Vec3::new(zero, -edge.z, edge.y),
-            Vec3::new(edge.z, zero, -edge.x),
-            Vec3::new(-edge.y, edge.x, zero),
-        ];
-        for axis in axes {
-            if separated(axis) {
-                return false;
-            }
-        }
-    }
-    // The triangle's plane. The normal's own rounding is covered by widening
-    // the bound with the product of the edge lengths.
-    let n = e[0].cross(e[1]);
-    let d = n.dot(v[0]);
-    let r = n.abs().dot(h);
-    let edge_scale = e[0].abs().max_component() * e[1].abs().max_component();
-    let err = slack
-        * (n.abs().dot(mag) + edge_scale * mag.max_component() * <T::Wide as Real>::from_f64(3.0));
-    d.abs() <= r + err
+    let mut meets = [false];
+    triangle_overlaps_boxes([p0, p1, p2], std::slice::from_ref(b), &mut meets);
+    meets[0]
 }
 
 /// The bounds of the part of triangle `p0 p1 p2` inside the closed box `b`,
@@ -459,6 +404,10 @@ impl<T: Real> Primitive<T> for Triangle<T> {
     fn overlaps_box(&self, b: &Aabb<T>) -> bool {
         let [p0, p1, p2] = self.vertices;
         triangle_overlaps_box(p0, p1, p2, b)
+    }
+
+    fn overlaps_boxes(&self, boxes: &[Aabb<T>], out: &mut [bool]) {
+        triangle_overlaps_boxes(self.vertices, boxes, out);
     }
 
     #[inline]
@@ -822,5 +771,97 @@ mod tests {
             let f = e * rng.range(-1.0, 1.0) + v(0.0, rng.range(-1e-3, 1e-3), 0.0);
             check_clip::<f32>([base, base + e, base + f], &b, 120);
         }
+    }
+
+    /// Whether the f64 separating-axis test, on unit axes, separates the
+    /// triangle from the box by more than `margin` (an independent oracle:
+    /// only clear separations count).
+    fn clearly_separated(p: [Vec3<f64>; 3], b: &Aabb<f64>, margin: f64) -> bool {
+        let centre = (b.min + b.max) * 0.5;
+        let half = (b.max - b.min) * 0.5;
+        let e = [p[1] - p[0], p[2] - p[1], p[0] - p[2]];
+        let units = [v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0), v(0.0, 0.0, 1.0)];
+        let mut axes = units.to_vec();
+        axes.push(e[0].cross(e[1]));
+        for edge in e {
+            axes.extend(units.iter().map(|u| u.cross(edge)));
+        }
+        axes.iter().filter(|a| a.length() > 0.0).any(|a| {
+            let a = a.normalized();
+            let proj = p.map(|q| a.dot(q - centre));
+            let lo = proj[0].min(proj[1]).min(proj[2]);
+            let hi = proj[0].max(proj[1]).max(proj[2]);
+            let r = a.abs().dot(half);
+            lo > r + margin || hi < -(r + margin)
+        })
+    }
+
+    /// Random triangles against the 4×4×4 cells around them, as a grid asks:
+    /// a cell holding a sampled point of the triangle always meets it, a
+    /// clearly separated one never does, and the batched, single and
+    /// prepared tests agree.
+    fn check_box_overlaps<T: Real>(seed: u64, offset: f64, scale: f64) {
+        let mut rng = Lcg(seed);
+        let (mut met, mut separated) = (0, 0);
+        for _ in 0..150 {
+            let pt: [Vec3<T>; 3] = [0; 3].map(|_| {
+                v::<f64>(
+                    rng.range(0.0, 3.0),
+                    rng.range(0.0, 3.0),
+                    rng.range(0.0, 3.0),
+                )
+                .map(|c| offset + c * scale)
+                .cast()
+            });
+            let exact: [Vec3<f64>; 3] = pt.map(|q| q.cast());
+            let tb = Aabb::from_points(exact);
+            let step = (tb.max - tb.min) * 0.25;
+            let mut cells = Vec::new();
+            for i in 0..64 {
+                let c = v::<f64>(f64::from(i % 4), f64::from(i / 4 % 4), f64::from(i / 16));
+                let lo = tb.min + v(step.x * c.x, step.y * c.y, step.z * c.z);
+                let cell: Aabb<T> = Aabb::new(lo, lo + step).cast();
+                cells.push(cell);
+            }
+            let mut batch = vec![false; cells.len()];
+            triangle_overlaps_boxes(pt, &cells, &mut batch);
+            let prepared = TriangleBoxTest::new(pt[0], pt[1], pt[2]);
+            // The oracle works relative to the first vertex, where these
+            // differences are exact and the samples' rounding is tiny.
+            let local = exact.map(|q| q - exact[0]);
+            let points = samples(local, 60);
+            for (cell, &answer) in cells.iter().zip(&batch) {
+                assert_eq!(answer, triangle_overlaps_box(pt[0], pt[1], pt[2], cell));
+                assert_eq!(answer, prepared.overlaps(cell));
+                let cell64: Aabb<f64> = cell.cast();
+                let cell64 = Aabb::new(cell64.min - exact[0], cell64.max - exact[0]);
+                if points.iter().any(|&q| cell64.contains_point(q)) {
+                    assert!(answer, "a cell holding a point of {exact:?} was refused");
+                    met += 1;
+                }
+                let margin = 1e-4 * scale;
+                if clearly_separated(local, &cell64, margin) {
+                    assert!(!answer, "a cell clearly apart from {exact:?} was accepted");
+                    separated += 1;
+                }
+            }
+        }
+        // Both kinds occur often enough for the checks to mean something.
+        assert!(
+            met > 1000 && separated > 1000,
+            "{met} met, {separated} separated"
+        );
+    }
+
+    #[test]
+    fn box_overlap_holds_sampled_meetings_and_refuses_clear_separations() {
+        check_box_overlaps::<f64>(5, 0.0, 1.0);
+        check_box_overlaps::<f32>(6, 0.0, 1.0);
+        // Far from the origin, where f32 spacing is coarse.
+        check_box_overlaps::<f32>(7, 4096.0, 1.0);
+        check_box_overlaps::<f64>(8, 1e9, 1.0);
+        // Extreme scales, which must neither overflow nor underflow.
+        check_box_overlaps::<f32>(9, 0.0, 1e-20);
+        check_box_overlaps::<f32>(10, 0.0, 1e20);
     }
 }

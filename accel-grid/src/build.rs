@@ -104,13 +104,36 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
             }
             return;
         }
+        // The cells go to the exact test in batches, so that the primitive
+        // prepares it once per batch (a triangle's axes and projections).
+        let mut boxes = [Aabb::empty(); CELL_BATCH];
+        let mut cells = [0usize; CELL_BATCH];
+        let mut meets = [false; CELL_BATCH];
+        let mut n = 0;
+        let mut test_batch = |boxes: &[Aabb<T>], cells: &[usize], meets: &mut [bool]| {
+            self.prims.overlaps_boxes(i, boxes, meets);
+            for (&c, &m) in cells.iter().zip(meets.iter()) {
+                if m {
+                    cell(c);
+                }
+            }
+        };
         for c in range.iter() {
-            if self.prims.overlaps_box(i, &self.geometry.cell_bounds(c)) {
-                cell(self.geometry.linear_index(c));
+            boxes[n] = self.geometry.cell_bounds(c);
+            cells[n] = self.geometry.linear_index(c);
+            n += 1;
+            if n == CELL_BATCH {
+                test_batch(&boxes, &cells, &mut meets);
+                n = 0;
             }
         }
+        test_batch(&boxes[..n], &cells[..n], &mut meets[..n]);
     }
 }
+
+/// Cells per call of [`PrimitiveSet::overlaps_boxes`]: most triangles of a
+/// dense scene cover a handful of cells, and the largest take several calls.
+const CELL_BATCH: usize = 32;
 
 /// Builds the geometry and cell lists of a grid over `prims`.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
