@@ -61,6 +61,7 @@ mod build;
 mod naive;
 mod node;
 mod params;
+mod reach;
 mod traverse;
 mod tree;
 mod validate;

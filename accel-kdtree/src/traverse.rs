@@ -9,11 +9,14 @@
 //! hit is lost at a plane, and primitives lying in a split plane (stored on
 //! one side only) are found from both. A component of `±0` visits only the
 //! side holding the origin, or both when the origin is within the beam of the
-//! plane. A node is skipped once the best hit, plus the hit tolerance
+//! plane. Below a node, the beam narrows to the rounding of what the node
+//! holds ([`crate::reach`]): a small dense mesh in a large scene is walked
+//! with a beam as thin as if it stood alone. A node is skipped once the best hit, plus the hit tolerance
 //! `t_tol`, lies before the node's entry; a per-query [`Mailbox`] tests each
 //! primitive once.
 
 use crate::build::decode_split;
+use crate::reach::node_beam;
 use crate::tree::KdTree;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
@@ -98,18 +101,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
 }
 
 /// [`TraversalRay::plane_band`] by the reciprocal direction instead of two
-/// divisions: the parameters at which the beam touches the plane
-/// `x[axis] = s`. Each end takes four roundings (the two differences, the
+/// divisions, for a beam of half-width `delta` (the node's, from
+/// [`node_beam`], at most the query's): the parameters at which the beam
+/// touches the plane `x[axis] = s`. Each end takes four roundings (the two differences, the
 /// reciprocal and the product) against plane_band's three, so it is widened
 /// by `gamma(6)` instead of `gamma(4)`: never narrower than plane_band's band.
 /// Components whose reciprocal is not finite (zero or subnormal) take
-/// plane_band itself.
+/// plane_band itself, with the query's own (wider) beam.
 ///
 /// For a beam parallel to the plane and clear of it, plane_band's empty band
 /// becomes `(+∞, +∞)`: the near child (the origin's side) for the whole
 /// interval, the far child never; within the beam it is `(−∞, +∞)`, both.
 #[inline(always)]
-fn band<T: Real>(tr: &TraversalRay<T>, inv: T, axis: usize, s: T, o: T) -> (T, T) {
+fn band<T: Real>(tr: &TraversalRay<T>, delta: T, inv: T, axis: usize, s: T, o: T) -> (T, T) {
     if !inv.is_finite() {
         let (lo, hi) = tr.plane_band(axis, s);
         return if lo > hi {
@@ -118,17 +122,34 @@ fn band<T: Real>(tr: &TraversalRay<T>, inv: T, axis: usize, s: T, o: T) -> (T, T
             (lo, hi)
         };
     }
-    let a = ((s - o) - tr.delta) * inv;
-    let b = ((s - o) + tr.delta) * inv;
+    let a = ((s - o) - delta) * inv;
+    let b = ((s - o) + delta) * inv;
     let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
     let g = T::gamma(6);
     (lo - lo.abs() * g, hi + hi.abs() * g)
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
-    /// Walks the leaves the beam touches, front to back.
+    /// Walks the leaves the beam touches, front to back, narrowing the beam
+    /// below each node where the tree says it pays.
     #[inline]
     fn walk<V: Visitor<T>, C: CostCounter>(
+        &self,
+        tr: &TraversalRay<T>,
+        v: &mut V,
+        counter: &mut C,
+    ) {
+        if self.reach.is_empty() {
+            self.walk_with::<false, V, C>(tr, v, counter);
+        } else {
+            self.walk_with::<true, V, C>(tr, v, counter);
+        }
+    }
+
+    /// [`KdTree::walk`], with the beam narrowed per node ([`node_beam`]) if
+    /// `NARROW`, else the query's beam throughout.
+    #[inline]
+    fn walk_with<const NARROW: bool, V: Visitor<T>, C: CostCounter>(
         &self,
         tr: &TraversalRay<T>,
         v: &mut V,
@@ -143,6 +164,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             lanes(ray.direction),
             lanes(tr.prepared.inv_dir),
         );
+        let max_d = ray.direction.abs().max_component();
         // The parameter after which nodes are skipped; it only moves at leaves.
         let mut cutoff = v.cutoff();
         let mut stack = [(0u32, T::ZERO, T::ZERO); STACK];
@@ -156,7 +178,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     let axis = node.axis();
                     let s = decode_split(node.split_word(), &self.splits);
                     let (da, oa) = (d[axis & 3], o[axis & 3]);
-                    let (lo, hi) = band(tr, inv[axis & 3], axis, s, oa);
+                    let delta = if NARROW {
+                        node_beam(self.reach[idx], t0, t1, max_d, tr.delta)
+                    } else {
+                        tr.delta
+                    };
+                    let (lo, hi) = band(tr, delta, inv[axis & 3], axis, s, oa);
                     // Below first when going up, or parallel on the low side
                     // (bitwise, not short-circuit: no branch to mispredict).
                     let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));

@@ -3,6 +3,7 @@
 use crate::build::{Out, build, decode_split, tree_stats};
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
+use crate::reach::{narrowing_pays, node_reaches};
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
 
 /// A SAH kD-tree over a primitive set (see the crate docs).
@@ -16,6 +17,9 @@ pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     pub(crate) nodes: Vec<KdNode>,
     pub(crate) refs: Vec<u32>,
     pub(crate) splits: Vec<T>,
+    /// Per node, how far its primitives reach ([`crate::reach`]); empty
+    /// where narrowing the beam would not pay ([`narrowing_pays`]).
+    pub(crate) reach: Vec<T>,
     pub(crate) bounds: Aabb<T>,
     pub(crate) depth_limit: u32,
     pub(crate) stats: AccelStats,
@@ -67,15 +71,21 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             refs,
             splits,
         } = built.out;
-        let tree = Self {
+        let mut tree = Self {
             prims,
             nodes,
             refs,
             splits,
+            reach: Vec::new(),
             bounds: built.bounds,
             depth_limit: built.depth_limit,
             stats,
         };
+        let reach = node_reaches(&tree);
+        if narrowing_pays(&tree, &reach) {
+            tree.reach = reach;
+            tree.stats.bytes += tree.reach.capacity() * size_of::<T>();
+        }
         #[cfg(debug_assertions)]
         if let Err(e) = tree.validate() {
             panic!("kd-tree invariant broken after build: {e}");
