@@ -19,7 +19,17 @@ fn run_fast(dir: &std::path::Path, args: &[&str]) -> String {
 #[test]
 fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     let dir = tempfile::tempdir().unwrap();
-    let text = run_fast(dir.path(), &["peers", "default", "--json", "p.json"]);
+    let text = run_fast(
+        dir.path(),
+        &[
+            "peers",
+            "default",
+            "--json",
+            "p.json",
+            "--build-rounds",
+            "3",
+        ],
+    );
     for name in ["grid", "octree", "kdtree"] {
         assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
     }
@@ -54,6 +64,33 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
         .map(|k| k[0].as_str().unwrap().to_owned())
         .collect();
     assert_eq!(kinds, ["primary", "shadow", "diffuse"]);
+    // Every tool built three times; the figure is the middle round.
+    assert_eq!(report["build_rounds"], 3);
+    for b in report["builds"].as_array().unwrap() {
+        let mut rounds: Vec<f64> = b["rounds_ms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r.as_f64().unwrap())
+            .collect();
+        assert_eq!(rounds.len(), 3, "{b}");
+        rounds.sort_by(f64::total_cmp);
+        assert_eq!(b["build_ms"].as_f64().unwrap(), rounds[1], "{b}");
+    }
+}
+
+#[test]
+fn peers_refuses_a_build_round_count_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["0", "101", "-1", "many"] {
+        let o = run(dir.path(), &["peers", "default", "--build-rounds", bad]);
+        assert!(!o.status.success(), "{bad} accepted");
+        assert!(
+            common::stderr(&o).contains("--build-rounds"),
+            "{bad}: {}",
+            common::stderr(&o)
+        );
+    }
 }
 
 #[test]

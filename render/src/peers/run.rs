@@ -76,6 +76,11 @@ pub struct PeersArgs {
     /// teapot_in_stadium tests every triangle of the teapot per ray).
     #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = min_time_parser, allow_negative_numbers = true)]
     pub max_pass_time: f64,
+    /// Build every tool this many times, in interleaved rounds (ours, then
+    /// each peer, then again), and report each one's median build: on a
+    /// shared machine one build per tool compares minutes, not tools.
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
+    pub build_rounds: u32,
     /// Write the results as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -109,10 +114,13 @@ pub struct BuildFigure {
     pub name: String,
     /// Ours or a peer.
     pub ours: bool,
-    /// Wall-clock build time on one thread, milliseconds.
+    /// Wall-clock build time on one thread, milliseconds: the median of
+    /// the rounds.
     pub build_ms: f64,
-    /// Millions of triangles built per second.
+    /// Millions of triangles built per second, from `build_ms`.
     pub mtris_per_s: f64,
+    /// Each round's build time, milliseconds, in order.
+    pub rounds_ms: Vec<f64>,
 }
 
 /// One tool on one ray set.
@@ -161,6 +169,8 @@ pub struct PeersReport {
 
     /// Relative `t` tolerance of the agreement checks.
     pub t_tolerance: f64,
+    /// Interleaved build rounds per tool.
+    pub build_rounds: u32,
     /// Builds, ours first.
     pub builds: Vec<BuildFigure>,
     /// Throughput and agreement per tool and set.
@@ -269,31 +279,114 @@ pub fn run(args: &PeersArgs) -> Result<()> {
     Ok(())
 }
 
+/// What [`build_all`] built.
+struct Built<'a> {
+    /// Ours (grid, octree, kD-tree), then the peers that built, from the
+    /// first round.
+    tools: Vec<Tool<'a>>,
+    /// Each tool's median build time over the rounds.
+    builds: Vec<BuildFigure>,
+    /// Peers not compiled in.
+    unavailable: Vec<Unavailable>,
+    /// Peers that failed to build in the first round, with the reason.
+    failed: Vec<(String, String)>,
+}
+
+/// Builds every tool in `rounds` interleaved rounds. A peer that fails in
+/// the first round is not tried again; one that fails later keeps the
+/// rounds it built.
+fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<'_>> {
+    let n = mesh.triangle_count();
+    let peer_mesh = PeerMesh::new(mesh);
+    let mut tools = Vec::new();
+    let mut times: Vec<(&'static str, bool, Vec<Duration>)> = Vec::new();
+    let mut unavailable = Vec::new();
+    let mut failed = Vec::new();
+    let ours = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree];
+    for round in 0..rounds {
+        let first = round == 0;
+        let mut record = |name: &'static str, is_ours: bool, d: Duration| match times
+            .iter_mut()
+            .find(|t| t.0 == name)
+        {
+            Some(t) => t.2.push(d),
+            None => times.push((name, is_ours, vec![d])),
+        };
+        for kind in ours {
+            let start = Instant::now();
+            let accel = accel::build_config(&AccelConfig::default_for(kind), mesh)?;
+            record(kind.name(), true, start.elapsed());
+            if first {
+                tools.push(Tool::Ours(kind, accel));
+            }
+        }
+        for PeerKind {
+            name,
+            feature,
+            build,
+            ..
+        } in super::peer_kinds()
+        {
+            let Some(build) = build else {
+                if first {
+                    unavailable.push(Unavailable { name, feature });
+                }
+                continue;
+            };
+            if !first && failed.iter().any(|(f, _): &(String, String)| f == name) {
+                continue;
+            }
+            match build(&peer_mesh) {
+                Ok(built) => {
+                    record(name, false, built.build);
+                    if first {
+                        tools.push(Tool::Peer(name, built.tracer));
+                    }
+                }
+                Err(why) => {
+                    if first {
+                        println!("{name}: not measured: {why}");
+                        failed.push((name.to_owned(), why));
+                    }
+                }
+            }
+        }
+    }
+    let builds = times
+        .into_iter()
+        .map(|(name, ours, rounds)| {
+            let s = bench::median(&rounds).as_secs_f64();
+            BuildFigure {
+                name: name.to_owned(),
+                ours,
+                build_ms: s * 1e3,
+                mtris_per_s: if s > 0.0 {
+                    n as f64 / s / 1e6
+                } else {
+                    f64::INFINITY
+                },
+                rounds_ms: rounds.iter().map(|d| d.as_secs_f64() * 1e3).collect(),
+            }
+        })
+        .collect();
+    Ok(Built {
+        tools,
+        builds,
+        unavailable,
+        failed,
+    })
+}
+
 fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersReport> {
     let scene = load_scene(&args.scene)?;
     let mesh = mesh_in::<f32>(&scene)?;
     let n = mesh.triangle_count();
-    let mut builds = Vec::new();
-    let mut record_build = |name: &str, ours: bool, d: Duration| {
-        let s = d.as_secs_f64();
-        builds.push(BuildFigure {
-            name: name.to_owned(),
-            ours,
-            build_ms: s * 1e3,
-            mtris_per_s: if s > 0.0 {
-                n as f64 / s / 1e6
-            } else {
-                f64::INFINITY
-            },
-        });
-    };
-    let mut tools = Vec::new();
-    for kind in [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree] {
-        let start = Instant::now();
-        let accel = accel::build_config(&AccelConfig::default_for(kind), &mesh)?;
-        record_build(kind.name(), true, start.elapsed());
-        tools.push(Tool::Ours(kind, accel));
-    }
+    let Built {
+        tools,
+        builds,
+        unavailable,
+        failed,
+    } = build_all(&mesh, args.build_rounds)?;
     let (sets, source) = match file_rays {
         Some(rays) => (
             vec![RaySet {
@@ -324,31 +417,6 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         }
     };
     println!("rays ({source}): {}", bench::describe_sets(&sets));
-    let peer_mesh = PeerMesh::new(&mesh);
-    let mut unavailable = Vec::new();
-    let mut failed = Vec::new();
-    for PeerKind {
-        name,
-        feature,
-        build,
-        ..
-    } in super::peer_kinds()
-    {
-        let Some(build) = build else {
-            unavailable.push(Unavailable { name, feature });
-            continue;
-        };
-        match build(&peer_mesh) {
-            Ok(built) => {
-                record_build(name, false, built.build);
-                tools.push(Tool::Peer(name, built.tracer));
-            }
-            Err(why) => {
-                println!("{name}: not measured: {why}");
-                failed.push((name.to_owned(), why));
-            }
-        }
-    }
     print_unavailable(&unavailable);
     let min_time = Duration::from_secs_f64(args.min_time);
     let max_pass = Duration::from_secs_f64(args.max_pass_time);
@@ -416,6 +484,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         ray_source: source,
         ray_sets: sets.iter().map(|s| (s.kind, s.rays.len() as u64)).collect(),
         min_time_s: args.min_time,
+        build_rounds: args.build_rounds,
 
         t_tolerance: T_TOLERANCE,
         builds,
@@ -474,7 +543,10 @@ pub fn report_lines(report: &PeersReport) -> Vec<String> {
         report.scene, report.triangles, report.min_time_s
     ));
     out.push(String::new());
-    out.push(format!("{:<14} {:>10} {:>9}", "build", "ms", "Mtris/s"));
+    out.push(format!(
+        "{:<14} {:>10} {:>9}  (median of {} interleaved rounds)",
+        "build", "ms", "Mtris/s", report.build_rounds
+    ));
     for b in &report.builds {
         out.push(format!(
             "{:<14} {:>10.1} {:>9.2}",
