@@ -28,34 +28,40 @@ pub(crate) fn node_reaches<T: Real, P: PrimitiveSet<T> + ?Sized>(
 }
 
 /// Whether narrowing the beam per node is worth its cost (a load and a few
-/// operations at every inner node, about 10% of a dense scene's traversal):
-/// when the thinnest beam any query gets, `gamma(64)` of half the scene's
-/// largest side, is at least 1/64 of the median reach of the non-empty
-/// leaves. Then the beam spans a noticeable part of a typical leaf and
-/// rays visit extra ones (a small dense mesh in a large scene); on dense
-/// scenes it is thousands of times thinner and narrowing changes no visit.
+/// operations at every inner node, about 10% of a dense scene's traversal,
+/// and a pass over the tree at build time): when the thinnest beam any query
+/// gets, `gamma(64)` of half the scene's largest side, is at least 1/64 of
+/// the median primitive (its bounds' largest side, over up to
+/// [`SIZE_SAMPLE`] primitives spread over the set). Then the beam spans a
+/// noticeable part of a typical leaf, and rays visit extra ones (a small
+/// dense mesh in a large scene); on dense scenes it is thousands of times
+/// thinner and narrowing changes no visit.
 pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized>(
     tree: &KdTree<'_, T, P>,
-    reach: &[T],
 ) -> bool {
-    let mut leaves: Vec<T> = tree
-        .nodes
-        .iter()
-        .zip(reach)
-        .filter(|(n, _)| n.is_leaf() && n.prim_count() > 0)
-        .map(|(_, &r)| r)
-        .collect();
-    if leaves.is_empty() {
+    let n = tree.prims.len();
+    if n == 0 || tree.nodes.is_empty() {
         return false;
     }
-    let mid = leaves.len() / 2;
-    let (_, &mut median, _) = leaves.select_nth_unstable_by(mid, |a, b| {
+    let step = n.div_ceil(SIZE_SAMPLE);
+    let mut sizes: Vec<T> = (0..n)
+        .step_by(step)
+        .map(|i| {
+            let b = tree.prims.bounds(i);
+            (b.max - b.min).max_component()
+        })
+        .collect();
+    let mid = sizes.len() / 2;
+    let (_, &mut median, _) = sizes.select_nth_unstable_by(mid, |a, b| {
         a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal)
     });
     let scene = (tree.bounds.max - tree.bounds.min).max_component();
     let thinnest = T::gamma(TRAVERSAL_ROUNDINGS) * scene * T::HALF;
     thinnest * T::from_f64(64.0) >= median
 }
+
+/// Primitives whose sizes [`narrowing_pays`] looks at, at most.
+const SIZE_SAMPLE: usize = 4096;
 
 /// The box holding node `i`'s `region` and its primitives' bounds; records
 /// its largest side in `reach[i]`. Recursion depth is the tree's depth
@@ -156,6 +162,20 @@ mod tests {
                 .fold(0.0, f64::max);
             prop_assert!(beam >= <f64 as Real>::gamma(36) * farthest, "beam {beam}, farthest vertex {farthest}");
             prop_assert!(beam <= delta);
+        }
+    }
+
+    #[test]
+    fn a_tree_narrows_its_beam_only_where_the_scene_dwarfs_its_primitives() {
+        use accel_core::TriangleMesh;
+        use accel_core::scenes::teapot_in_stadium;
+        // The same dense sphere (triangles about 0.06 across) in a stadium of
+        // side 10^4, where the query beam is about 0.02 wide, and of side 10,
+        // where it is about 2e-5.
+        for (stadium, narrows) in [(1e4, true), (10.0, false)] {
+            let mesh: TriangleMesh<f32> = teapot_in_stadium(5000, stadium).cast().unwrap();
+            let tree = KdTree::new(&mesh).unwrap();
+            assert_eq!(!tree.reach.is_empty(), narrows, "stadium {stadium}");
         }
     }
 

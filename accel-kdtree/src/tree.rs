@@ -81,9 +81,8 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             depth_limit: built.depth_limit,
             stats,
         };
-        let reach = node_reaches(&tree);
-        if narrowing_pays(&tree, &reach) {
-            tree.reach = reach;
+        if narrowing_pays(&tree) {
+            tree.reach = node_reaches(&tree);
             tree.stats.bytes += tree.reach.capacity() * size_of::<T>();
         }
         #[cfg(debug_assertions)]
