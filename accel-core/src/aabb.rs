@@ -70,6 +70,18 @@ impl<T: Real> Aabb<T> {
         self.min.is_finite() && self.max.is_finite()
     }
 
+    /// The two parts of this box on either side of the plane
+    /// `x[axis] = at`: below (`max[axis] = at`) and above (`min[axis] = at`),
+    /// both closed, so both hold the plane. A kD-tree node's children.
+    #[inline]
+    #[must_use]
+    pub fn split_at(&self, axis: usize, at: T) -> (Self, Self) {
+        let (mut below, mut above) = (*self, *self);
+        below.max[axis] = at;
+        above.min[axis] = at;
+        (below, above)
+    }
+
     /// The box holding both boxes.
     #[inline]
     #[must_use]
@@ -303,6 +315,19 @@ mod tests {
     /// A non-symmetric box, so that swapped axes or halved terms show.
     fn box123() -> Aabb<f64> {
         Aabb::new(Vec3::new(1.0, -2.0, 0.5), Vec3::new(2.0, 0.0, 3.5))
+    }
+
+    #[test]
+    fn split_at_cuts_only_the_named_axis() {
+        let (below, above) = box123().split_at(1, -0.5);
+        assert_eq!(
+            below,
+            Aabb::new(Vec3::new(1.0, -2.0, 0.5), Vec3::new(2.0, -0.5, 3.5))
+        );
+        assert_eq!(
+            above,
+            Aabb::new(Vec3::new(1.0, -0.5, 0.5), Vec3::new(2.0, 0.0, 3.5))
+        );
     }
 
     #[test]

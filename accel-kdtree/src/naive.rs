@@ -100,10 +100,7 @@ fn node<T: Real, P: PrimitiveSet<T> + ?Sized>(
         return;
     };
     let (k, p) = (s.axis, s.pos);
-    let mut below_box = bounds;
-    below_box.max[k] = p;
-    let mut above_box = bounds;
-    above_box.min[k] = p;
+    let (below_box, above_box) = bounds.split_at(k, p);
     let (mut below, mut above) = (Vec::new(), Vec::new());
     for it in items {
         match box_side(&it.b, &s) {

@@ -79,9 +79,7 @@ fn reach_box<T: Real, P: PrimitiveSet<T> + ?Sized>(
             .fold(region, |b, &p| b.union(&tree.prims.bounds(p as usize)))
     } else {
         let (axis, s) = (node.axis(), decode_split(node.split_word(), &tree.splits));
-        let (mut below, mut above) = (region, region);
-        below.max[axis] = s;
-        above.min[axis] = s;
+        let (below, above) = region.split_at(axis, s);
         let a = reach_box(tree, i + 1, below, reach);
         let b = reach_box(tree, node.above_child() as usize, above, reach);
         a.union(&b)

@@ -97,9 +97,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     i + 1
                 ));
             }
-            let (mut lo, mut hi) = (b, b);
-            lo.max[axis] = s;
-            hi.min[axis] = s;
+            let (lo, hi) = b.split_at(axis, s);
             stack.push((above, hi, depth + 1));
             stack.push((i + 1, lo, depth + 1));
         }

@@ -174,10 +174,7 @@ pub(crate) fn split_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
 ) -> (BinnedNode<T>, BinnedNode<T>) {
     let (k, p) = (split.axis, split.pos);
-    let mut left_box = node.bounds;
-    left_box.max[k] = p;
-    let mut right_box = node.bounds;
-    right_box.min[k] = p;
+    let (left_box, right_box) = node.bounds.split_at(k, p);
     let mut left = child(left_box, node.depth, node.prims.len() / 2);
     let mut right = child(right_box, node.depth, node.prims.len() / 2);
     for (&g, b) in node.prims.iter().zip(&node.boxes) {

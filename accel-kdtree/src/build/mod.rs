@@ -407,9 +407,7 @@ pub(crate) fn tree_stats<T: Real>(
         } else {
             sah_cost += params.traversal_cost * area_ratio(&b);
             let (axis, s) = (node.axis(), decode_split(node.split_word(), &out.splits));
-            let (mut lo, mut hi) = (b, b);
-            lo.max[axis] = s;
-            hi.min[axis] = s;
+            let (lo, hi) = b.split_at(axis, s);
             stack.push((i + 1, lo, depth + 1));
             stack.push((node.above_child() as usize, hi, depth + 1));
         }

@@ -121,10 +121,7 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
         }
     }
 
-    let mut left_box = bounds;
-    left_box.max[k] = p;
-    let mut right_box = bounds;
-    right_box.min[k] = p;
+    let (left_box, right_box) = bounds.split_at(k, p);
 
     // Renumber; clip the straddlers to each child (perfect splits).
     let mut left_prims = spares.words();
