@@ -9,6 +9,8 @@
 use crate::{Aabb, Ray, Real, TriangleMesh, Vec3};
 use core::f64::consts::{PI, TAU};
 
+pub mod driver;
+
 /// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fully specified generator.
 #[derive(Clone, Debug)]
 pub struct SplitMix64(u64);
