@@ -18,12 +18,27 @@ pub fn primitive_bounds<T: Real, P: PrimitiveSet<T> + ?Sized>(
         return Err(BuildError::TooManyPrimitives { count: n });
     }
     let boxes: Vec<Aabb<T>> = (0..n).into_par_iter().map(|i| prims.bounds(i)).collect();
-    if let Some(index) = boxes.par_iter().position_first(|b| !b.is_finite()) {
-        return Err(BuildError::NonFinitePrimitive { index });
-    }
-    let total = boxes
+    // One pass for the union and the first non-finite box.
+    let (total, first_bad) = boxes
         .par_iter()
-        .copied()
-        .reduce(Aabb::empty, |a, b| a.union(&b));
+        .enumerate()
+        .fold(
+            || (Aabb::empty(), usize::MAX),
+            |(total, bad), (i, b)| {
+                let bad = if bad == usize::MAX && !b.is_finite() {
+                    i
+                } else {
+                    bad
+                };
+                (total.union(b), bad)
+            },
+        )
+        .reduce(
+            || (Aabb::empty(), usize::MAX),
+            |a, b| (a.0.union(&b.0), a.1.min(b.1)),
+        );
+    if first_bad != usize::MAX {
+        return Err(BuildError::NonFinitePrimitive { index: first_bad });
+    }
     Ok((boxes, total))
 }

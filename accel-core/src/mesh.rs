@@ -161,10 +161,20 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
         self.indices.len()
     }
 
+    /// By plain selects: the vertices are finite (checked when the mesh was
+    /// made), so [`Real::min`]'s NaN rule, several instructions a component,
+    /// has nothing to decide.
     #[inline]
     fn bounds(&self, i: usize) -> Aabb<T> {
         let [a, b, c] = self.triangle(i);
-        Aabb::from_point(a).union_point(b).union_point(c)
+        let lesser = |x: T, y: T| if x < y { x } else { y };
+        let greater = |x: T, y: T| if x > y { x } else { y };
+        let lo = |x: T, y: T, z: T| lesser(lesser(x, y), z);
+        let hi = |x: T, y: T, z: T| greater(greater(x, y), z);
+        Aabb {
+            min: Vec3::new(lo(a.x, b.x, c.x), lo(a.y, b.y, c.y), lo(a.z, b.z, c.z)),
+            max: Vec3::new(hi(a.x, b.x, c.x), hi(a.y, b.y, c.y), hi(a.z, b.z, c.z)),
+        }
     }
 
     #[inline]

@@ -99,9 +99,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
         // axes (a row of cells): only wider ranges need the exact test.
         let wide_axes = (0..3).filter(|&a| range.lo[a] != range.hi[a]).count();
         if wide_axes <= 1 {
-            for c in range.iter() {
-                cell(self.geometry.linear_index(c));
-            }
+            self.geometry.for_each_cell_index(&range, cell);
             return;
         }
         // The cells go to the exact test in batches, so that the primitive
@@ -118,15 +116,15 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
                 }
             }
         };
-        for c in range.iter() {
-            boxes[n] = self.geometry.cell_bounds(c);
-            cells[n] = self.geometry.linear_index(c);
+        self.geometry.for_each_cell_box(&range, |c, b| {
+            boxes[n] = b;
+            cells[n] = c;
             n += 1;
             if n == CELL_BATCH {
                 test_batch(&boxes, &cells, &mut meets);
                 n = 0;
             }
-        }
+        });
         test_batch(&boxes[..n], &cells[..n], &mut meets[..n]);
     }
 }
@@ -174,16 +172,18 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         + (0..3)
             .map(|a| size_of_val(geometry.boundaries(a)))
             .sum::<usize>();
+    let (empty_cells, max_cell_len) = cells.occupancy();
     let stats = AccelStats {
         kind: "grid",
         primitives: prims.len(),
+        // Everything the build does, its statistics included.
         build_time: start.elapsed(),
         bytes,
         nodes: geometry.cell_count(),
         leaves: geometry.cell_count(),
-        empty_leaves: cells.empty_cells(),
+        empty_leaves: empty_cells,
         references: cells.reference_count(),
-        max_leaf_references: cells.max_cell_len(),
+        max_leaf_references: max_cell_len,
         extra: vec![
             ("nx", f64::from(res[0])),
             ("ny", f64::from(res[1])),

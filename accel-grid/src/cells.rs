@@ -175,6 +175,45 @@ impl<T: Real> GridGeometry<T> {
         }
     }
 
+    /// Calls `f` with the linear index of every cell of `range`, x fastest
+    /// (as [`CellBox::iter`] and [`GridGeometry::linear_index`], in plain
+    /// loops).
+    #[inline]
+    pub fn for_each_cell_index(&self, range: &CellBox, mut f: impl FnMut(usize)) {
+        let [nx, ny, _] = self.resolution.map(|n| n as usize);
+        let [lo, hi] = [range.lo, range.hi].map(|c| c.map(|i| i as usize));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                let row = nx * (y + ny * z);
+                for x in lo[0]..=hi[0] {
+                    f(row + x);
+                }
+            }
+        }
+    }
+
+    /// Calls `f` with the linear index and the closed box
+    /// ([`GridGeometry::cell_bounds`]) of every cell of `range`, x fastest.
+    #[inline]
+    pub fn for_each_cell_box(&self, range: &CellBox, mut f: impl FnMut(usize, Aabb<T>)) {
+        let [nx, ny, _] = self.resolution.map(|n| n as usize);
+        let lo = range.lo.map(|i| i as usize);
+        let span = |a: usize| &self.boundaries[a][lo[a]..=range.hi[a] as usize + 1];
+        let (xs, ys, zs) = (span(0), span(1), span(2));
+        for (z, zb) in (lo[2]..).zip(zs.windows(2)) {
+            for (y, yb) in (lo[1]..).zip(ys.windows(2)) {
+                let row = nx * (y + ny * z);
+                for (x, xb) in (lo[0]..).zip(xs.windows(2)) {
+                    let b = Aabb {
+                        min: Vec3::new(xb[0], yb[0], zb[0]),
+                        max: Vec3::new(xb[1], yb[1], zb[1]),
+                    };
+                    f(row + x, b);
+                }
+            }
+        }
+    }
+
     /// The cell along `axis` that holds coordinate `origin + rel`, clamped to
     /// the grid: the largest `i` with `boundary[i] − origin ≤ rel`.
     ///
@@ -231,21 +270,49 @@ impl<T: Real> GridGeometry<T> {
         if b.is_empty() || !b.overlaps(&self.bounds) {
             return None;
         }
-        let mut lo = [0u32; 3];
-        let mut hi = [0u32; 3];
-        for a in 0..3 {
-            let bounds = &self.boundaries[a];
-            // Highest cell whose lower boundary is at or below b.max.
-            hi[a] = self.axis_cell(a, b.max[a]);
-            // Lowest cell whose upper boundary is at or above b.min: the cell
-            // holding b.min, or below it when b.min sits on its lower boundary.
-            let mut l = self.axis_cell(a, b.min[a]);
-            while l > 0 && bounds[l as usize] >= b.min[a] {
-                l -= 1;
+        let (x, y, z) = (
+            self.axis_span(0, self.scale.x, b.min.x, b.max.x),
+            self.axis_span(1, self.scale.y, b.min.y, b.max.y),
+            self.axis_span(2, self.scale.z, b.min.z, b.max.z),
+        );
+        Some(CellBox {
+            lo: [x.0, y.0, z.0],
+            hi: [x.1, y.1, z.1],
+        })
+    }
+
+    /// The cells along `axis` whose closed extent meets `[min, max]`: from
+    /// the highest cell whose lower boundary lies below `min` (or the first)
+    /// to the highest whose lower boundary is at most `max`. One guess from
+    /// `scale` per end, fixed against the stored boundaries.
+    #[inline(always)]
+    fn axis_span(&self, axis: usize, scale: T, min: T, max: T) -> (u32, u32) {
+        let b = self.boundaries[axis].as_slice();
+        let last = self.resolution[axis] - 1;
+        let first = b[0];
+        let guess = |x: T| {
+            let g = (x - first) * scale;
+            if g > T::ZERO {
+                g.to_i64_saturating().min(i64::from(last)) as u32
+            } else {
+                0
             }
-            lo[a] = l.min(hi[a]);
+        };
+        let mut hi = guess(max);
+        while hi > 0 && max < b[hi as usize] {
+            hi -= 1;
         }
-        Some(CellBox { lo, hi })
+        while hi < last && max >= b[hi as usize + 1] {
+            hi += 1;
+        }
+        let mut lo = guess(min).min(hi);
+        while lo > 0 && b[lo as usize] >= min {
+            lo -= 1;
+        }
+        while lo < hi && b[lo as usize + 1] < min {
+            lo += 1;
+        }
+        (lo, hi)
     }
 }
 
@@ -323,6 +390,67 @@ mod tests {
         let all = g.cells_overlapping(g.bounds()).unwrap();
         assert_eq!(all.len(), g.cell_count());
         assert_eq!(all.iter().count(), g.cell_count());
+    }
+
+    /// The cells along one axis whose closed extent meets `[min, max]`, by
+    /// scanning every cell: the definition `cells_overlapping` must meet.
+    fn scanned_span(bounds: &[f32], min: f32, max: f32) -> Option<(u32, u32)> {
+        let meets: Vec<u32> = (0..bounds.len() - 1)
+            .filter(|&i| bounds[i] <= max && bounds[i + 1] >= min)
+            .map(|i| i as u32)
+            .collect();
+        Some((*meets.first()?, *meets.last()?))
+    }
+
+    proptest::proptest! {
+        /// Boxes anywhere in, across and outside grids of every shape, with
+        /// ends on, just beside and between boundaries, far from the origin
+        /// too: the range is exactly the cells a scan finds.
+        #[test]
+        fn overlapping_cells_are_the_scanned_ones(
+            lo in proptest::array::uniform3(-1.0e6f32..1.0e6),
+            size in proptest::array::uniform3(1.0e-3f32..1.0e3),
+            res in proptest::array::uniform3(1u32..40),
+            ends in proptest::array::uniform3((-0.2f32..1.2, 0.0f32..0.6)),
+            snap in proptest::array::uniform3(0u8..4),
+        ) {
+            let min = Vec3::new(lo[0], lo[1], lo[2]);
+            let grid = Aabb::new(min, min + Vec3::new(size[0], size[1], size[2]));
+            let g = GridGeometry::new(grid, res);
+            let mut bmin = Vec3::ZERO;
+            let mut bmax = Vec3::ZERO;
+            for a in 0..3 {
+                let (at, len) = ends[a];
+                let bs = g.boundaries(a);
+                let width = grid.max[a] - grid.min[a];
+                let mut x0 = grid.min[a] + at * width;
+                // Some ends sit on a boundary or one ulp beside it.
+                let k = ((at.clamp(0.0, 1.0) * res[a] as f32) as usize).min(bs.len() - 1);
+                match snap[a] {
+                    1 => x0 = bs[k],
+                    2 => x0 = bs[k].next_up(),
+                    3 => x0 = bs[k].next_down(),
+                    _ => {}
+                }
+                bmin[a] = x0;
+                bmax[a] = x0 + len * width;
+            }
+            let b = Aabb::new(bmin, bmax);
+            let scanned: Option<Vec<(u32, u32)>> = (0..3)
+                .map(|a| scanned_span(g.boundaries(a), b.min[a], b.max[a]))
+                .collect();
+            let got = g.cells_overlapping(&b);
+            match scanned {
+                None => proptest::prop_assert!(got.is_none()),
+                Some(spans) => {
+                    let want = CellBox {
+                        lo: [spans[0].0, spans[1].0, spans[2].0],
+                        hi: [spans[0].1, spans[1].1, spans[2].1],
+                    };
+                    proptest::prop_assert_eq!(got, Some(want));
+                }
+            }
+        }
     }
 
     #[test]

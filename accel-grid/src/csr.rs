@@ -237,17 +237,30 @@ impl CellLists {
     /// Cells with no reference.
     #[must_use]
     pub fn empty_cells(&self) -> usize {
-        self.offsets.par_windows(2).filter(|w| w[0] == w[1]).count()
+        self.occupancy().0
     }
 
     /// The most references in one cell.
     #[must_use]
     pub fn max_cell_len(&self) -> usize {
+        self.occupancy().1
+    }
+
+    /// The cells with no reference and the most references in one cell, in
+    /// one pass over the offsets (a large grid's largest array).
+    #[must_use]
+    pub fn occupancy(&self) -> (usize, usize) {
         self.offsets
             .par_windows(2)
-            .map(|w| (w[1] - w[0]) as usize)
-            .max()
-            .unwrap_or(0)
+            .with_min_len(CELLS_PER_CHUNK)
+            .fold(
+                || (0, 0),
+                |(empty, most), w| {
+                    let len = (w[1] - w[0]) as usize;
+                    (empty + usize::from(len == 0), most.max(len))
+                },
+            )
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)))
     }
 }
 
@@ -311,12 +324,10 @@ fn sort_each_cell(offsets: &[u32], refs: &mut [u32]) {
     groups.into_par_iter().for_each(|(first, group)| {
         let base = offsets[first];
         let last = (first + CELLS_PER_TASK).min(cell_count);
-        for c in first..last {
-            let (s, e) = (
-                (offsets[c] - base) as usize,
-                (offsets[c + 1] - base) as usize,
-            );
-            group[s..e].sort_unstable();
+        for w in offsets[first..=last].windows(2) {
+            if w[1] - w[0] > 1 {
+                group[(w[0] - base) as usize..(w[1] - base) as usize].sort_unstable();
+            }
         }
     });
 }

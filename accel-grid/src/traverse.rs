@@ -15,9 +15,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         if cells.lo == cells.hi {
             f(self.cells.cell(self.geometry.linear_index(cells.lo)));
         } else {
-            for c in cells.iter() {
-                f(self.cells.cell(self.geometry.linear_index(c)));
-            }
+            self.geometry
+                .for_each_cell_index(&cells, |c| f(self.cells.cell(c)));
         }
     }
 
@@ -162,9 +161,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
             return Ok(Vec::new());
         };
         let mut found: Vec<u32> = Vec::new();
-        for c in cells.iter() {
-            found.extend_from_slice(self.cells.cell(self.geometry.linear_index(c)));
-        }
+        self.geometry.for_each_cell_index(&cells, |c| {
+            found.extend_from_slice(self.cells.cell(c));
+        });
         Ok(region_matches(self.prims, region, found))
     }
 

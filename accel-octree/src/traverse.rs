@@ -261,16 +261,13 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
         let Some(cells) = node.geometry.cells_overlapping(region) else {
             return;
         };
-        for c in cells.iter() {
-            let Entry { prims, child } = entry(
-                self.cells
-                    .cell(node.cell_index(node.geometry.linear_index(c))),
-            );
+        node.geometry.for_each_cell_index(&cells, |c| {
+            let Entry { prims, child } = entry(self.cells.cell(node.cell_index(c)));
             out.extend_from_slice(prims);
             if let Some(child) = child {
                 self.gather(&self.nodes[child], region, out);
             }
-        }
+        });
     }
 }
 
