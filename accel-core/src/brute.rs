@@ -3,7 +3,7 @@
 use crate::accelerator::validate_region;
 use crate::{
     Aabb, AccelStats, Accelerator, BuildError, CostCounter, Hit, PreparedRay, PrimitiveSet,
-    QueryError, Ray, Real, TraversalCounters, primitive_bounds,
+    QueryError, Ray, Real, TraversalCounters, bounds_union,
 };
 use std::time::Instant;
 
@@ -23,7 +23,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> BruteForce<'a, T, P> {
     /// [`BuildError::NonFinitePrimitive`] or [`BuildError::TooManyPrimitives`].
     pub fn new(prims: &'a P) -> Result<Self, BuildError> {
         let start = Instant::now();
-        let (_, bounds) = primitive_bounds(prims)?;
+        let bounds = bounds_union(prims)?;
         let stats = AccelStats {
             kind: "brute",
             primitives: prims.len(),

@@ -3,7 +3,7 @@
 use crate::cells::GridGeometry;
 use crate::csr::{CellLists, CellVisitor};
 use crate::resolution::resolution;
-use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
+use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, bounds_union};
 use std::time::Instant;
 
 /// Build parameters of a [`crate::Grid`].
@@ -75,8 +75,9 @@ pub struct PrimitiveCells<'a, T, P: ?Sized> {
     pub geometry: &'a GridGeometry<T>,
     /// The primitives.
     pub prims: &'a P,
-    /// Their bounds, precomputed.
-    pub bounds: &'a [Aabb<T>],
+    /// Their bounds, precomputed, or `None` to ask the primitives (cheap
+    /// for triangles, and no array to write).
+    pub bounds: Option<&'a [Aabb<T>]>,
     /// Only primitives whose overlap test accepts this box are placed (the
     /// user region), or all when `None`.
     pub region: Option<&'a Aabb<T>>,
@@ -91,7 +92,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
         {
             return;
         }
-        let Some(range) = self.geometry.cells_overlapping(&self.bounds[i]) else {
+        let bounds = match self.bounds {
+            Some(boxes) => boxes[i],
+            None => self.prims.bounds(i),
+        };
+        let Some(range) = self.geometry.cells_overlapping(&bounds) else {
             return;
         };
         // A primitive is connected and its bounds reach each extreme, so it
@@ -139,7 +144,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     params: &GridParams<T>,
 ) -> Result<Built<T>, BuildError> {
     let start = Instant::now();
-    let (boxes, scene_bounds) = primitive_bounds(prims)?;
+    let scene_bounds = bounds_union(prims)?;
     let (grid_bounds, object_count) = match &params.region {
         Some(region) => {
             if !region.is_finite() || region.is_empty() {
@@ -147,7 +152,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
             // Count what the region holds, for the resolution rule.
             let count = (0..prims.len())
-                .filter(|&i| boxes[i].overlaps(region) && prims.overlaps_box(i, region))
+                .filter(|&i| prims.bounds(i).overlaps(region) && prims.overlaps_box(i, region))
                 .count();
             (*region, count)
         }
@@ -159,7 +164,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let visitor = PrimitiveCells {
         geometry: &geometry,
         prims,
-        bounds: &boxes,
+        bounds: None,
         region: params.region.as_ref(),
     };
     let cells = CellLists::build(

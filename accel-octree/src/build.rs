@@ -231,7 +231,7 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
         let visitor = PrimitiveCells {
             geometry: &geometry,
             prims,
-            bounds: boxes,
+            bounds: Some(boxes),
             region: None,
         };
         let lists = CellLists::build(
@@ -399,7 +399,7 @@ fn refine<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let visitor = PrimitiveCells {
         geometry: &geometry,
         prims,
-        bounds: boxes,
+        bounds: Some(boxes),
         region: None,
     };
     let lists = CellLists::build_items(geometry.cell_count(), &plan.go, max_references, &visitor)?;

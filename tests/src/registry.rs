@@ -7,7 +7,7 @@
 //! user-defined [`crate::Mixed`] primitive.
 
 use accel_core::{
-    Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Real, Vec3, primitive_bounds,
+    Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Real, Vec3, bounds_union,
 };
 use accel_grid::{Grid, GridParams};
 use accel_kdtree::{KdTree, KdTreeParams};
@@ -143,7 +143,7 @@ pub fn enclosing_region_params<T: Real, P: PrimitiveSet<T> + ?Sized>(
 pub fn enclosing_region<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
 ) -> Result<Aabb<T>, BuildError> {
-    let (_, b) = primitive_bounds(prims)?;
+    let b = bounds_union(prims)?;
     if b.is_empty() {
         return Ok(Aabb::new(Vec3::ZERO, Vec3::splat(T::ONE)));
     }
