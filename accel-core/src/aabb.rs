@@ -1,5 +1,6 @@
 //! Axis-aligned bounding boxes, with pbrt's vocabulary.
 
+use crate::real::{greater, lesser};
 use crate::{Real, Vec3};
 
 /// An axis-aligned box `[min, max]`, closed on both sides.
@@ -272,7 +273,9 @@ impl<T: Real> Aabb<T> {
     ///
     /// The margin is applied to the corner offsets from the origin
     /// (`(min − origin) − margin`), not to the corners, so that a margin far
-    /// below the rounding unit of large coordinates is not lost.
+    /// below the rounding unit of large coordinates is not lost. The origin
+    /// and direction must be finite, as a validated ray's are (with a NaN the
+    /// answer is unspecified).
     #[inline]
     #[must_use]
     pub fn beam_interval(&self, origin: Vec3<T>, dir: Vec3<T>, margin: T) -> Option<(T, T)> {
@@ -299,8 +302,10 @@ impl<T: Real> Aabb<T> {
         let (n0, f0) = slab(0)?;
         let (n1, f1) = slab(1)?;
         let (n2, f2) = slab(2)?;
-        let t0 = T::NEG_INFINITY.max(n0).max(n1).max(n2);
-        let t1 = T::INFINITY.min(f0).min(f1).min(f2);
+        // Plain selects: a slab end is a finite or infinite quotient of a
+        // finite (or infinite) offset by a nonzero component, never NaN.
+        let t0 = greater(greater(n0, n1), n2);
+        let t1 = lesser(lesser(f0, f1), f2);
         let slack = T::gamma(3) + T::gamma(3);
         let t0 = t0 - t0.abs() * slack;
         let t1 = t1 + t1.abs() * slack;

@@ -1,5 +1,6 @@
 //! Indexed triangle meshes: shared vertices, triangles as index triples.
 
+use crate::real::{greater, lesser};
 use crate::triangle::{
     clip_triangle_bounds, intersect_triangle, triangle_overlaps_box, triangle_overlaps_boxes,
 };
@@ -167,8 +168,6 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
     #[inline]
     fn bounds(&self, i: usize) -> Aabb<T> {
         let [a, b, c] = self.triangle(i);
-        let lesser = |x: T, y: T| if x < y { x } else { y };
-        let greater = |x: T, y: T| if x > y { x } else { y };
         let lo = |x: T, y: T, z: T| lesser(lesser(x, y), z);
         let hi = |x: T, y: T, z: T| greater(greater(x, y), z);
         Aabb {

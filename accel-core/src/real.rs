@@ -297,6 +297,20 @@ impl_real!(f64, u64, "f64", |a: f64, b: f64, c: f64, d: f64| {
     }
 });
 
+/// The smaller of `a` and `b` by a plain select: one instruction, where
+/// [`Real::min`]'s NaN rule costs several. For values that cannot be NaN
+/// (finite geometry and what is derived from it); with a NaN it returns `b`.
+#[inline(always)]
+pub(crate) fn lesser<T: Real>(a: T, b: T) -> T {
+    if a < b { a } else { b }
+}
+
+/// The larger of `a` and `b`, as [`lesser`].
+#[inline(always)]
+pub(crate) fn greater<T: Real>(a: T, b: T) -> T {
+    if a > b { a } else { b }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,7 +14,8 @@
 //! traversal's own crossing parameters, which are relative to `|t|·|d|`, itself
 //! bounded by the same distance inside the structure's bounds.
 
-use crate::{Aabb, PreparedRay, Ray, Real};
+use crate::real::greater;
+use crate::{Aabb, PreparedRay, Ray, Real, Vec3};
 
 /// The number of roundings that [`TraversalRay::delta`] allows for, as pbrt's
 /// `gamma(n)`: generous, since a larger beam only costs a few extra cells.
@@ -49,12 +50,17 @@ impl<T: Real> TraversalRay<T> {
         }
         let o = ray.origin;
         let d = ray.direction;
-        let reach = (bounds.min - o)
-            .abs()
-            .max((bounds.max - o).abs())
-            .max_component();
+        // Plain selects (no NaN here: the ray is finite, the bounds too, and
+        // their differences at worst infinite).
+        let largest = |v: Vec3<T>| greater(greater(v.x, v.y), v.z);
+        let (near, far) = ((bounds.min - o).abs(), (bounds.max - o).abs());
+        let reach = largest(Vec3::new(
+            greater(near.x, far.x),
+            greater(near.y, far.y),
+            greater(near.z, far.z),
+        ));
         let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach;
-        let t_tol = delta / d.abs().max_component() * (T::ONE + T::gamma(2));
+        let t_tol = delta / largest(d.abs()) * (T::ONE + T::gamma(2));
         let (t0, t1) = bounds.beam_interval(o, d, delta)?;
         // Finite even for an unbounded interval whose beam entry or exit
         // overflows (a tiny direction): no hit has an infinite parameter, and

@@ -8,6 +8,7 @@
 //! [`TriangleBoxTest::overlaps`] is left with the box's centre and radius on
 //! each axis.
 
+use crate::real::{greater, lesser};
 use crate::{Aabb, Real, Vec3};
 
 /// `T`'s wide type, in which the test computes.
@@ -64,6 +65,8 @@ impl<T: Real> TriangleBoxTest<T> {
         let mut projections = [(zero, zero); 9];
         for (j, &e) in edges.iter().enumerate() {
             for k in 0..3 {
+                // Plain selects: the projections are finite for finite
+                // vertices, and a NaN one only makes its axis separate nothing.
                 let [a, b, c] = q.map(|v| dot_cross_unit(k, e, v));
                 projections[3 * j + k] = (lesser(lesser(a, b), c), greater(greater(a, b), c));
             }
@@ -159,20 +162,6 @@ pub fn triangle_overlaps_boxes<T: Real>(
                 .axes_allow(b)
         });
     }
-}
-
-/// The smaller of `a` and `b` by a plain select (one instruction, where
-/// [`Real::min`]'s NaN rule costs several): the projections are finite for
-/// finite vertices, and a NaN one only makes its axis separate nothing.
-#[inline(always)]
-fn lesser<W: Real>(a: W, b: W) -> W {
-    if a < b { a } else { b }
-}
-
-/// The larger of `a` and `b`, as [`lesser`].
-#[inline(always)]
-fn greater<W: Real>(a: W, b: W) -> W {
-    if a > b { a } else { b }
 }
 
 /// `(unit_k × e) · v`, the axis being `(0, −e.z, e.y)`, `(e.z, 0, −e.x)` or
