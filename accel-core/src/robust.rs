@@ -53,12 +53,10 @@ impl<T: Real> TraversalRay<T> {
         // Plain selects (no NaN here: the ray is finite, the bounds too, and
         // their differences at worst infinite).
         let largest = |v: Vec3<T>| greater(greater(v.x, v.y), v.z);
-        let (near, far) = ((bounds.min - o).abs(), (bounds.max - o).abs());
-        let reach = largest(Vec3::new(
-            greater(near.x, far.x),
-            greater(near.y, far.y),
-            greater(near.z, far.z),
-        ));
+        let reach = greater(
+            largest((bounds.min - o).abs()),
+            largest((bounds.max - o).abs()),
+        );
         let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach;
         let t_tol = delta / largest(d.abs()) * (T::ONE + T::gamma(2));
         let (t0, t1) = bounds.beam_interval(o, d, delta)?;

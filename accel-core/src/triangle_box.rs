@@ -56,6 +56,13 @@ impl<T: Real> TriangleBoxTest<T> {
     /// Prepares triangle `p0 p1 p2`.
     #[must_use]
     pub fn new(p0: Vec3<T>, p1: Vec3<T>, p2: Vec3<T>) -> Self {
+        let vertices = [p0, p1, p2];
+        Self::with_bounds(vertices, vertex_bounds(&vertices))
+    }
+
+    /// [`TriangleBoxTest::new`] for a caller that already holds the
+    /// triangle's bounds ([`vertex_bounds`]).
+    fn with_bounds([p0, p1, p2]: [Vec3<T>; 3], bounds: Aabb<T>) -> Self {
         let w = |v: Vec3<T>| v.map(T::to_wide);
         let origin = w(p0);
         let q = [Vec3::splat(Wide::<T>::ZERO), w(p1) - origin, w(p2) - origin];
@@ -76,7 +83,7 @@ impl<T: Real> TriangleBoxTest<T> {
             * edges[1].abs().max_component()
             * Wide::<T>::from_f64(3.0);
         Self {
-            bounds: Aabb::from_point(p0).union_point(p1).union_point(p2),
+            bounds,
             vertices: [p0, p1, p2],
             origin,
             extent,
@@ -154,14 +161,21 @@ pub fn triangle_overlaps_boxes<T: Real>(
     out: &mut [bool],
 ) {
     let vertices = [p0, p1, p2];
-    let bounds = Aabb::from_point(p0).union_point(p1).union_point(p2);
+    let bounds = vertex_bounds(&vertices);
     let mut test = None;
     for (b, o) in boxes.iter().zip(out) {
         *o = settled_by_vertices(&bounds, &vertices, b).unwrap_or_else(|| {
-            test.get_or_insert_with(|| TriangleBoxTest::new(p0, p1, p2))
+            test.get_or_insert_with(|| TriangleBoxTest::with_bounds(vertices, bounds))
                 .axes_allow(b)
         });
     }
+}
+
+/// The bounds of a triangle's vertices, compared exactly by the test (the
+/// three box-face axes).
+#[inline]
+fn vertex_bounds<T: Real>([p0, p1, p2]: &[Vec3<T>; 3]) -> Aabb<T> {
+    Aabb::from_point(*p0).union_point(*p1).union_point(*p2)
 }
 
 /// `(unit_k × e) · v`, the axis being `(0, −e.z, e.y)`, `(e.z, 0, −e.x)` or
