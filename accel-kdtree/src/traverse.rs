@@ -100,20 +100,41 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
     }
 }
 
+/// The rounding allowance, in units of `gamma(1)`, of [`band`]'s centre and
+/// of its half-width factor.
+const BAND_ROUNDINGS: u32 = 8;
+
 /// [`TraversalRay::plane_band`] by the reciprocal direction instead of two
 /// divisions, for a beam of half-width `delta` (the node's, from
-/// [`node_beam`], at most the query's): the parameters at which the beam
-/// touches the plane `x[axis] = s`. Each end takes four roundings (the two differences, the
-/// reciprocal and the product) against plane_band's three, so it is widened
-/// by `gamma(6)` instead of `gamma(4)`: never narrower than plane_band's band.
-/// Components whose reciprocal is not finite (zero or subnormal) take
-/// plane_band itself, with the query's own (wider) beam.
+/// [`node_beam`], at most the query's): an interval holding every parameter
+/// at which the beam touches the plane `x[axis] = s`, which is exactly
+/// `(s − o)/d ∓ delta/|d|`.
 ///
-/// For a beam parallel to the plane and clear of it, plane_band's empty band
-/// becomes `(+∞, +∞)`: the near child (the origin's side) for the whole
-/// interval, the far child never; within the beam it is `(−∞, +∞)`, both.
+/// It is computed as a centre and a half-width, without sorting two ends.
+/// The centre `tc = (s − o)·inv` takes three roundings, so it lies within
+/// `gamma(3)·|c|` of the exact `c = (s − o)/d`; `half_inv` is
+/// `|inv|·(1 + gamma(8))`, at least `1/|d|` by more than its own and the
+/// product's roundings. The half-width `gamma(8)·|tc| + delta·half_inv`
+/// therefore exceeds `|tc − c| + delta/|d|` by more than the roundings of the
+/// sum and of `tc ∓` it, so each end lies beyond the exact one.
+///
+/// Components whose reciprocal is not finite (zero or subnormal) take
+/// plane_band itself, with the query's own (wider) beam. For a beam parallel
+/// to the plane and clear of it, plane_band's empty band becomes `(+∞, +∞)`:
+/// the near child (the origin's side) for the whole interval, the far child
+/// never; within the beam it is `(−∞, +∞)`, both. An end that overflows, or
+/// is `∞ − ∞ = NaN`, makes the walk keep the node's own interval for both
+/// children.
 #[inline(always)]
-fn band<T: Real>(tr: &TraversalRay<T>, delta: T, inv: T, axis: usize, s: T, o: T) -> (T, T) {
+fn band<T: Real>(
+    tr: &TraversalRay<T>,
+    delta: T,
+    inv: T,
+    half_inv: T,
+    axis: usize,
+    s: T,
+    o: T,
+) -> (T, T) {
     if !inv.is_finite() {
         let (lo, hi) = tr.plane_band(axis, s);
         return if lo > hi {
@@ -122,11 +143,16 @@ fn band<T: Real>(tr: &TraversalRay<T>, delta: T, inv: T, axis: usize, s: T, o: T
             (lo, hi)
         };
     }
-    let a = ((s - o) - delta) * inv;
-    let b = ((s - o) + delta) * inv;
-    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-    let g = T::gamma(6);
-    (lo - lo.abs() * g, hi + hi.abs() * g)
+    finite_band(delta, inv, half_inv, s, o)
+}
+
+/// [`band`] for a finite reciprocal `inv` of the direction component, with
+/// `half_inv = |inv|·(1 + gamma(BAND_ROUNDINGS))`.
+#[inline(always)]
+fn finite_band<T: Real>(delta: T, inv: T, half_inv: T, s: T, o: T) -> (T, T) {
+    let tc = (s - o) * inv;
+    let half = tc.abs() * T::gamma(BAND_ROUNDINGS) + delta * half_inv;
+    (tc - half, tc + half)
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
@@ -164,6 +190,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             lanes(ray.direction),
             lanes(tr.prepared.inv_dir),
         );
+        let half_inv = lanes(tr.prepared.inv_dir.abs() * (T::ONE + T::gamma(BAND_ROUNDINGS)));
         let max_d = ray.direction.abs().max_component();
         // The parameter after which nodes are skipped; it only moves at leaves.
         let mut cutoff = v.cutoff();
@@ -183,7 +210,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     } else {
                         tr.delta
                     };
-                    let (lo, hi) = band(tr, delta, inv[axis & 3], axis, s, oa);
+                    let (lo, hi) = band(tr, delta, inv[axis & 3], half_inv[axis & 3], axis, s, oa);
                     // Below first when going up, or parallel on the low side
                     // (bitwise, not short-circuit: no branch to mispredict).
                     let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));
@@ -324,5 +351,44 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
 
     fn stats(&self) -> AccelStats {
         self.stats.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A value of either sign spread over many binades.
+    fn spread(max_exp: i32) -> impl Strategy<Value = f32> {
+        (any::<bool>(), 1.0..2.0f32, -max_exp..=max_exp)
+            .prop_map(|(neg, m, e)| if neg { -m } else { m } * 2f32.powi(e))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+        /// The band holds the exact parameters `(s − o)/d ∓ delta/|d|`,
+        /// computed in `f64` (the `f32` difference is exact there, and the
+        /// two divisions' roundings are far below the `f32` margins, so a
+        /// tolerance of a few `f64` rounding units suffices). Beams from
+        /// far thinner than the rounding of `s − o` to far wider.
+        #[test]
+        fn band_holds_the_exact_interval_where_the_beam_meets_the_plane(
+            o in spread(20),
+            s in spread(20),
+            d in spread(30),
+            delta_exp in -40..10i32,
+        ) {
+            let delta = 2f32.powi(delta_exp);
+            let inv = 1.0 / d;
+            prop_assume!(inv.is_finite());
+            let half_inv = inv.abs() * (1.0 + <f32 as Real>::gamma(BAND_ROUNDINGS));
+            let (lo, hi) = finite_band(delta, inv, half_inv, s, o);
+            let (o, s, d, delta) = (f64::from(o), f64::from(s), f64::from(d), f64::from(delta));
+            let (c, r) = ((s - o) / d, delta / d.abs());
+            let slack = (c.abs() + r) * 4.0 * f64::EPSILON;
+            prop_assert!(f64::from(lo) <= c - r + slack, "lo {lo} > {}", c - r);
+            prop_assert!(f64::from(hi) >= c + r - slack, "hi {hi} < {}", c + r);
+        }
     }
 }
