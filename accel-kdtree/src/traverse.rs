@@ -226,14 +226,23 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     // node's own parameter, as `min`/`max` did.
                     let near_t1 = if hi < t1 { hi } else { t1 };
                     let far_t0 = if lo > t0 { lo } else { t0 };
-                    // The far child waits on the stack when the beam reaches
-                    // it (written always, kept only then: sp < STACK here,
-                    // since an inner node lies above the depth limit).
-                    stack[sp] = (far as u32, far_t0, t1);
-                    sp += usize::from(far_t0 <= t1);
+                    let visit_far = far_t0 <= t1;
                     if t0 <= near_t1 {
+                        // The far child waits on the stack when the beam
+                        // reaches it (written always, kept only then: sp <
+                        // STACK here, since an inner node lies above the
+                        // depth limit).
+                        stack[sp] = (far as u32, far_t0, t1);
+                        sp += usize::from(visit_far);
                         idx = near;
                         t1 = near_t1;
+                        continue;
+                    }
+                    if visit_far {
+                        // The far child alone: straight there, not through
+                        // the stack.
+                        idx = far;
+                        t0 = far_t0;
                         continue;
                     }
                 } else if v.leaf(self.leaf_primitives(node), counter) {
