@@ -273,7 +273,10 @@ impl<T: Real> Aabb<T> {
     ///
     /// The margin is applied to the corner offsets from the origin
     /// (`(min − origin) − margin`), not to the corners, so that a margin far
-    /// below the rounding unit of large coordinates is not lost. The origin
+    /// below the rounding unit of large coordinates is not lost. The interval
+    /// holds every parameter at which the line lies in the box grown by the
+    /// margin less the offsets' own rounding (`u·|corner − origin|` per
+    /// axis, `u` the unit roundoff; nothing when the margin is 0). The origin
     /// and direction must be finite, as a validated ray's are (with a NaN the
     /// answer is unspecified).
     #[inline]
@@ -395,6 +398,59 @@ mod tests {
             .line_interval(Vec3::new(0.0, -1.0, 2.0), Vec3::new(-1.0, 0.0, 0.0))
             .unwrap();
         assert!(t0 <= -2.0 && (-1.0..-1.0 + 1e-12).contains(&t1));
+    }
+
+    /// A value of either sign spread over many binades.
+    fn spread(max_exp: i32) -> impl proptest::strategy::Strategy<Value = f32> {
+        use proptest::prelude::*;
+        (any::<bool>(), 1.0..2.0f32, -max_exp..=max_exp)
+            .prop_map(|(neg, m, e)| if neg { -m } else { m } * 2f32.powi(e))
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20_000))]
+        /// The slab interval holds the exact interval of the box grown by
+        /// the margin less the rounding of the corner offsets, as its doc
+        /// says, computed in `f64` (the `f32` differences are exact or
+        /// nearly so there, its roundings far below the `f32` widening), and
+        /// is `None` only where that is empty. Margins from 0 (the line) to
+        /// well beyond the coordinates' rounding.
+        #[test]
+        fn beam_interval_holds_the_exact_interval_of_the_grown_box(
+            a in [spread(12), spread(12), spread(12)],
+            b in [spread(12), spread(12), spread(12)],
+            o in [spread(14), spread(14), spread(14)],
+            d in [spread(20), spread(20), spread(20)],
+            margin_exp in proptest::option::of(-30..4i32),
+        ) {
+            let bx = Aabb::new(Vec3::from(a), Vec3::from(a)).union_point(Vec3::from(b));
+            let margin = margin_exp.map_or(0.0, |e| 2f32.powi(e));
+            let (o, d) = (Vec3::from(o), Vec3::from(d));
+            let got = bx.beam_interval(o, d, margin);
+            let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+            for axis in 0..3 {
+                // The margin less the first difference's rounding, which is
+                // absolute (`u·|corner − origin|`) once a margin follows.
+                let (lo, hi) = (
+                    f64::from(bx.min[axis]) - f64::from(o[axis]),
+                    f64::from(bx.max[axis]) - f64::from(o[axis]),
+                );
+                let rounding = f64::from(f32::EPSILON) * lo.abs().max(hi.abs());
+                let m = (f64::from(margin) - rounding).max(0.0);
+                let (lo, hi) = (lo - m, hi + m);
+                let dd = f64::from(d[axis]);
+                let (n, f) = if dd > 0.0 { (lo / dd, hi / dd) } else { (hi / dd, lo / dd) };
+                t0 = t0.max(n);
+                t1 = t1.min(f);
+            }
+            // The reference's own error: a few f64 roundings of each end.
+            let (s0, s1) = (t0.abs() * 8.0 * f64::EPSILON, t1.abs() * 8.0 * f64::EPSILON);
+            if t0 + s0 <= t1 - s1 {
+                let (g0, g1) = got.expect("the grown box meets the line");
+                proptest::prop_assert!(f64::from(g0) <= t0 + s0, "{g0} > {t0}");
+                proptest::prop_assert!(f64::from(g1) >= t1 - s1, "{g1} < {t1}");
+            }
+        }
     }
 
     #[test]
