@@ -177,9 +177,13 @@ impl<T: Real> GridGeometry<T> {
 
     /// Calls `f` with the linear index of every cell of `range`, x fastest
     /// (as [`CellBox::iter`] and [`GridGeometry::linear_index`], in plain
-    /// loops).
+    /// loops; a range of one cell, a walk's usual step, without them).
     #[inline]
     pub fn for_each_cell_index(&self, range: &CellBox, mut f: impl FnMut(usize)) {
+        if range.lo == range.hi {
+            f(self.linear_index(range.lo));
+            return;
+        }
         let [nx, ny, _] = self.resolution.map(|n| n as usize);
         let [lo, hi] = [range.lo, range.hi].map(|c| c.map(|i| i as usize));
         for z in lo[2]..=hi[2] {

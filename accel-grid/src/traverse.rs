@@ -1,6 +1,5 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
-use crate::cells::CellBox;
 use crate::dda::{BeamWalk, Step};
 use crate::grid::Grid;
 use accel_core::{
@@ -9,17 +8,6 @@ use accel_core::{
 };
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
-    /// Calls `f` with the reference list of every cell in `cells`.
-    #[inline]
-    fn for_cells(&self, cells: CellBox, mut f: impl FnMut(&[u32])) {
-        if cells.lo == cells.hi {
-            f(self.cells.cell(self.geometry.linear_index(cells.lo)));
-        } else {
-            self.geometry
-                .for_each_cell_index(&cells, |c| f(self.cells.cell(c)));
-        }
-    }
-
     /// Calls `f` with the reference list of every cell a walk step opened.
     #[inline]
     fn for_step(&self, step: Step, f: impl FnMut(&[u32])) {
@@ -28,7 +16,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                 let mut f = f;
                 f(self.cells.cell(self.geometry.linear_index(c)));
             }
-            Step::Cells(b) => self.for_cells(b, f),
+            Step::Cells(b) => {
+                let mut f = f;
+                self.geometry
+                    .for_each_cell_index(&b, |c| f(self.cells.cell(c)));
+            }
             Step::End => {}
         }
     }

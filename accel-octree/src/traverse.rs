@@ -20,20 +20,7 @@ use accel_core::{
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalCounters, TraversalRay, nearer,
     region_matches, region_search_box, validate_region,
 };
-use accel_grid::cells::CellBox;
 use accel_grid::dda::BeamWalk;
-
-/// Calls `f` with every cell of `cells` (most often just one).
-#[inline]
-fn for_each_cell(cells: CellBox, mut f: impl FnMut([u32; 3])) {
-    if cells.lo == cells.hi {
-        f(cells.lo);
-    } else {
-        for c in cells.iter() {
-            f(c);
-        }
-    }
-}
 
 /// The beam for walking `node`: the parent's, narrowed to the rounding of
 /// what the node holds.
@@ -112,7 +99,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P,
         let (mut walk, first) = BeamWalk::start(&node.geometry, tr, from);
         let mut cells = first;
         loop {
-            for_each_cell(cells, |c| self.cell(node, tr, c));
+            node.geometry
+                .for_each_cell_index(&cells, |c| self.cell(node, tr, c));
             match walk.advance(self.limit(tr)) {
                 Some(next) => cells = next,
                 None => return,
@@ -120,16 +108,13 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P,
         }
     }
 
-    /// Tests the primitives of one cell, then walks its child grid if it
-    /// has one.
+    /// Tests the primitives of cell `c` (a linear index in `node`'s grid),
+    /// then walks its child grid if it has one.
     #[inline]
-    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: [u32; 3]) {
+    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) {
         self.counter.node();
         let tree = self.tree;
-        let Entry { prims, child } = entry(
-            tree.cells
-                .cell(node.cell_index(node.geometry.linear_index(c))),
-        );
+        let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
         for &p in prims {
             if self.mailbox.seen(p) {
                 continue;
@@ -167,7 +152,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> 
         let mut cells = first;
         loop {
             let mut found = false;
-            for_each_cell(cells, |c| found = found || self.cell(node, tr, c));
+            node.geometry
+                .for_each_cell_index(&cells, |c| found = found || self.cell(node, tr, c));
             if found {
                 return true;
             }
@@ -178,15 +164,13 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> 
         }
     }
 
-    /// Whether a primitive of one cell, or of its child grid, is hit.
+    /// Whether a primitive of cell `c` (a linear index in `node`'s grid), or
+    /// of its child grid, is hit.
     #[inline]
-    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: [u32; 3]) -> bool {
+    fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) -> bool {
         self.counter.node();
         let tree = self.tree;
-        let Entry { prims, child } = entry(
-            tree.cells
-                .cell(node.cell_index(node.geometry.linear_index(c))),
-        );
+        let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
         let t_max = self.prepared.ray.t_max;
         for &p in prims {
             if self.mailbox.seen(p) {
