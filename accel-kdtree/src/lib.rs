@@ -30,9 +30,12 @@
 //! sweep must match node for node.
 //!
 //! **Layout.** 8-byte nodes as pbrt's `KdTreeNode` ([`KdNode`]): axis or leaf
-//! flag in two bits, 30 bits of child index or primitive count, and a word for
-//! the split position (`f32`) or an index into a table (`f64`); leaves index
-//! one flat `u32` reference array (a one-primitive leaf holds it inline).
+//! flag in two bits, then a leaf's 30-bit primitive count or an inner node's
+//! 29-bit above-child index and a flag for an empty below child, and a word
+//! for the split position (`f32`) or an index into a table (`f64`); leaves
+//! index one flat `u32` reference array (a one-primitive leaf holds it
+//! inline). Empty leaves are not stored: the parent marks them, and the walk
+//! never visits them.
 //!
 //! **Traversal.** Front to back with a small stack (pbrt's `KdTreeAggregate`
 //! and Havran's thesis), made exact by treating the ray as the thin beam of

@@ -1,12 +1,15 @@
 //! The 8-byte node, after pbrt's `KdTreeNode`.
 //!
 //! Two `u32` words. The low two bits of `flags` hold the split axis (0, 1, 2)
-//! or 3 for a leaf; the other 30 bits hold the index of the "above" child
-//! (inner nodes; the "below" child is the next node, depth-first order) or the
-//! primitive count (leaves). `payload` holds the split position's bits (`f32`
-//! trees) or its index in a side table (`f64` trees, whose positions do not
-//! fit), and for a leaf the one primitive's index (count 1) or the offset of
-//! its run in the flat reference array.
+//! or 3 for a leaf. A leaf's other 30 bits hold its primitive count. An
+//! inner node's bit 2 says that its "below" child is an empty leaf, and the
+//! 29 bits above it hold the index of its "above" child, 0 when that child is
+//! an empty leaf: empty leaves are not stored (the root, node 0, is no one's
+//! child), so a walk skips them without loading a node. A stored below child
+//! is the next node (depth-first order). `payload` holds the split position's
+//! bits (`f32` trees) or its index in a side table (`f64` trees, whose
+//! positions do not fit), and for a leaf the one primitive's index (count 1)
+//! or the offset of its run in the flat reference array.
 
 /// A node of a [`crate::KdTree`]: inner (axis, split, children) or leaf
 /// (a run of primitive references).
@@ -21,20 +24,38 @@ const _: () = assert!(size_of::<KdNode>() == 8);
 
 /// The leaf tag in the low bits of `flags`.
 const LEAF: u32 = 3;
+/// An inner node's flag: its below child is an empty leaf, not stored.
+const BELOW_EMPTY: u32 = 1 << 2;
+/// Where an inner node's above child index starts in `flags`.
+const ABOVE_SHIFT: u32 = 3;
 
 impl KdNode {
-    /// The most primitives in one leaf, and the most nodes in one tree.
+    /// The most primitives in one leaf.
     pub const MAX_COUNT: u32 = (1 << 30) - 1;
+    /// The most nodes in one tree (29-bit child indices).
+    pub const MAX_NODES: u32 = (1 << 29) - 1;
 
     /// An inner node splitting `axis` (0..3) at the position stored as
-    /// `split_word`, whose above child is node `above`.
+    /// `split_word`, whose below child is the next node and whose above
+    /// child is node `above` (0: an empty leaf, not stored).
     #[inline]
     #[must_use]
     pub(crate) const fn inner(axis: usize, split_word: u32, above: u32) -> Self {
-        debug_assert!(axis < 3 && above <= Self::MAX_COUNT);
+        debug_assert!(axis < 3 && above <= Self::MAX_NODES);
         Self {
             payload: split_word,
-            flags: (above << 2) | axis as u32,
+            flags: (above << ABOVE_SHIFT) | axis as u32,
+        }
+    }
+
+    /// This inner node with its below child an empty leaf, not stored.
+    #[inline]
+    #[must_use]
+    pub(crate) const fn without_below(self) -> Self {
+        debug_assert!(!self.is_leaf());
+        Self {
+            payload: self.payload,
+            flags: self.flags | BELOW_EMPTY,
         }
     }
 
@@ -64,12 +85,33 @@ impl KdNode {
         (self.flags & 3) as usize
     }
 
-    /// The index of an inner node's above child (the below child is the
-    /// node right after this one).
+    /// The index of an inner node's above child, or 0 when that child is an
+    /// empty leaf (not stored).
     #[inline]
     #[must_use]
     pub const fn above_child(self) -> u32 {
-        self.flags >> 2
+        self.flags >> ABOVE_SHIFT
+    }
+
+    /// Whether an inner node's below child is stored (as the next node);
+    /// `false` when it is an empty leaf.
+    #[inline]
+    #[must_use]
+    pub const fn has_below(self) -> bool {
+        self.flags & BELOW_EMPTY == 0
+    }
+
+    /// The stored children `[below, above]` of inner node `at` (this node),
+    /// `None` for an empty leaf.
+    #[inline]
+    #[must_use]
+    pub const fn children(self, at: usize) -> [Option<usize>; 2] {
+        let below = if self.has_below() { Some(at + 1) } else { None };
+        let above = match self.above_child() {
+            0 => None,
+            i => Some(i as usize),
+        };
+        [below, above]
     }
 
     /// The stored split word of an inner node (position bits or table index).
@@ -113,7 +155,16 @@ impl KdNode {
             }
         } else {
             let payload = split_base.map_or(self.payload, |b| self.payload + b);
-            Self::inner(self.axis(), payload, self.above_child() + node_base)
+            let above = match self.above_child() {
+                0 => 0,
+                i => i + node_base,
+            };
+            let node = Self::inner(self.axis(), payload, above);
+            if self.has_below() {
+                node
+            } else {
+                node.without_below()
+            }
         }
     }
 }
@@ -124,12 +175,21 @@ mod tests {
 
     #[test]
     fn fields_round_trip() {
-        let n = KdNode::inner(2, 0xDEAD_BEEF, KdNode::MAX_COUNT);
+        let n = KdNode::inner(2, 0xDEAD_BEEF, KdNode::MAX_NODES);
         assert!(!n.is_leaf());
         assert_eq!(
-            (n.axis(), n.split_word(), n.above_child()),
-            (2, 0xDEAD_BEEF, KdNode::MAX_COUNT)
+            (n.axis(), n.split_word(), n.above_child(), n.has_below()),
+            (2, 0xDEAD_BEEF, KdNode::MAX_NODES, true)
         );
+        let n = n.without_below();
+        assert_eq!(
+            (n.axis(), n.split_word(), n.above_child(), n.has_below()),
+            (2, 0xDEAD_BEEF, KdNode::MAX_NODES, false)
+        );
+        assert_eq!(n.children(7), [None, Some(KdNode::MAX_NODES as usize)]);
+        assert_eq!(KdNode::inner(0, 0, 0).children(7), [Some(8), None]);
+        let l = KdNode::leaf(KdNode::MAX_COUNT, 1);
+        assert_eq!(l.prim_count(), KdNode::MAX_COUNT);
         let l = KdNode::leaf(7, 1234);
         assert!(l.is_leaf());
         assert_eq!((l.prim_count(), l.leaf_payload()), (7, 1234));
@@ -146,6 +206,11 @@ mod tests {
         assert_eq!((n.axis(), n.split_word(), n.above_child()), (1, 15, 109));
         let n = KdNode::inner(0, 5, 9).relocated(100, 1000, None);
         assert_eq!(n.split_word(), 5);
+        // Empty children stay empty.
+        let n = KdNode::inner(0, 5, 0)
+            .without_below()
+            .relocated(100, 1000, None);
+        assert_eq!(n.children(3), [None, None]);
         assert_eq!(
             KdNode::leaf(3, 4).relocated(100, 1000, None),
             KdNode::leaf(3, 1004)

@@ -80,8 +80,9 @@ fn reach_box<T: Real, P: PrimitiveSet<T> + ?Sized>(
     } else {
         let (axis, s) = (node.axis(), decode_split(node.split_word(), &tree.splits));
         let (below, above) = region.split_at(axis, s);
-        let a = reach_box(tree, i + 1, below, reach);
-        let b = reach_box(tree, node.above_child() as usize, above, reach);
+        // An unstored (empty) child holds its region alone.
+        let [a, b] = [(0, below), (1, above)]
+            .map(|(c, r)| node.children(i)[c].map_or(r, |j| reach_box(tree, j, r, reach)));
         a.union(&b)
     };
     let side = (held.max - held.min).max_component();

@@ -214,7 +214,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     // Below first when going up, or parallel on the low side
                     // (bitwise, not short-circuit: no branch to mispredict).
                     let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));
-                    let (below, above) = (idx + 1, node.above_child() as usize);
+                    // Child index 0 (the root's) stands for an empty leaf,
+                    // which is not stored and never visited.
+                    let below = if node.has_below() { idx + 1 } else { 0 };
+                    let above = node.above_child() as usize;
                     let (near, far) = if below_first {
                         (below, above)
                     } else {
@@ -226,8 +229,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     // node's own parameter, as `min`/`max` did.
                     let near_t1 = if hi < t1 { hi } else { t1 };
                     let far_t0 = if lo > t0 { lo } else { t0 };
-                    let visit_far = far_t0 <= t1;
-                    if t0 <= near_t1 {
+                    let visit_far = (far_t0 <= t1) & (far != 0);
+                    if (t0 <= near_t1) & (near != 0) {
                         // The far child waits on the stack when the beam
                         // reaches it (written always, kept only then: sp <
                         // STACK here, since an inner node lies above the
@@ -347,12 +350,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
                     continue;
                 }
                 let (axis, s) = (node.axis(), decode_split(node.split_word(), &self.splits));
-                if grown.min[axis] <= s {
-                    stack.push(i + 1);
-                }
-                if grown.max[axis] >= s {
-                    stack.push(node.above_child() as usize);
-                }
+                let [below, above] = node.children(i);
+                stack.extend(below.filter(|_| grown.min[axis] <= s));
+                stack.extend(above.filter(|_| grown.max[axis] >= s));
             }
         }
         Ok(region_matches(self.prims, region, found))

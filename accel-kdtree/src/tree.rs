@@ -93,7 +93,9 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
     }
 
     /// The nodes, depth-first: node 0 is the root, an inner node's below
-    /// child follows it, its above child is at [`KdNode::above_child`].
+    /// child follows it, its above child is at [`KdNode::above_child`]; an
+    /// empty leaf is not stored but marked in its parent
+    /// ([`KdNode::children`]).
     #[must_use]
     pub fn nodes(&self) -> &[KdNode] {
         &self.nodes

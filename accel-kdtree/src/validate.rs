@@ -7,7 +7,8 @@ use accel_core::{PrimitiveSet, Real};
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// Checks the tree's invariants: every node reached exactly once from the
     /// root in depth-first order (below child next, above child after the
-    /// below subtree), splits finite and strictly inside their node's box,
+    /// below subtree), empty leaves not stored but marked in their parent
+    /// (only an empty root is stored), splits finite and strictly inside their node's box,
     /// depth within the limit, leaf runs tiling the reference array in order,
     /// each leaf's primitives strictly ascending, in range, with bounds
     /// touching the leaf's box, and every primitive in some leaf.
@@ -41,6 +42,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             let node = self.nodes[i];
             if node.is_leaf() {
                 let count = node.prim_count() as usize;
+                if count == 0 && i > 0 {
+                    return Err(format!(
+                        "node {i}: an empty leaf stored (its parent marks it)"
+                    ));
+                }
                 if count >= 2 {
                     if node.leaf_payload() as usize != next_ref {
                         return Err(format!(
@@ -74,7 +80,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                 }
                 continue;
             }
-            let (axis, above) = (node.axis(), node.above_child() as usize);
+            let axis = node.axis();
             if !inline_splits::<T>() {
                 if node.split_word() as usize != next_split || next_split >= self.splits.len() {
                     return Err(format!(
@@ -91,15 +97,28 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     b.min[axis], b.max[axis]
                 ));
             }
-            if i + 1 >= self.nodes.len() || above <= i + 1 || above >= self.nodes.len() {
+            // Stored children come after the node (the below one next, the
+            // above one after the below one's subtree); the depth-first
+            // check above catches any that skip a node.
+            let [below, above] = node.children(i);
+            if below.is_some_and(|b| b >= self.nodes.len())
+                || above
+                    .is_some_and(|a| a <= i + usize::from(below.is_some()) || a >= self.nodes.len())
+            {
                 return Err(format!(
-                    "node {i}: children {} and {above} out of range",
-                    i + 1
+                    "node {i}: children {below:?} and {above:?} out of range"
                 ));
             }
             let (lo, hi) = b.split_at(axis, s);
-            stack.push((above, hi, depth + 1));
-            stack.push((i + 1, lo, depth + 1));
+            if depth + 1 > self.depth_limit && (below.is_none() || above.is_none()) {
+                return Err(format!(
+                    "node {i}: an empty leaf at depth {} beyond the limit {}",
+                    depth + 1,
+                    self.depth_limit
+                ));
+            }
+            stack.extend(above.map(|a| (a, hi, depth + 1)));
+            stack.extend(below.map(|b| (b, lo, depth + 1)));
         }
         if visited != self.nodes.len() {
             return Err(format!(
@@ -190,10 +209,18 @@ mod tests {
                 && t.nodes[i].prim_count() == 1
                 && t.nodes[i].leaf_payload() == p
             {
-                t.nodes[i] = KdNode::leaf(0, 0);
+                t.nodes[i] = KdNode::leaf(1, 63 - p);
             }
         }
         assert!(t.validate().is_err());
+
+        // An empty leaf stored instead of marked in its parent.
+        let mut t = KdTree::with_params(&m, &params()).unwrap();
+        let stored = (1..t.nodes.len())
+            .find(|&i| t.nodes[i].is_leaf() && t.nodes[i].prim_count() >= 1)
+            .unwrap();
+        t.nodes[stored] = KdNode::leaf(0, 0);
+        assert!(t.validate().unwrap_err().contains("empty leaf stored"));
 
         // An above child that skips a node.
         let mut t = KdTree::with_params(&m, &params()).unwrap();

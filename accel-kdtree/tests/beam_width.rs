@@ -318,8 +318,9 @@ fn leaf_regions<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
             Some(s) => {
                 let (below, above) = region.split_at(node.axis(), s);
-                stack.push((i + 1, below));
-                stack.push((node.above_child() as usize, above));
+                let [b, a] = node.children(i);
+                stack.extend(b.map(|b| (b, below)));
+                stack.extend(a.map(|a| (a, above)));
             }
         }
     }

@@ -117,6 +117,45 @@ fn sah_cost_beats_a_single_leaf_and_depth_is_bounded() {
 }
 
 #[test]
+fn empty_leaves_are_marked_not_stored_and_still_counted() {
+    // The sphere's hollow inside and the stadium's empty space make many
+    // empty leaves.
+    for mesh in [
+        uv_sphere(Vec3::ZERO, 1.0, 20_000),
+        teapot_in_stadium(5_000, 1.0e4),
+    ] {
+        let tree = KdTree::new(&mesh).unwrap();
+        let nodes = tree.nodes();
+        let inner: Vec<usize> = (0..nodes.len()).filter(|&i| !nodes[i].is_leaf()).collect();
+        let unstored = inner
+            .iter()
+            .flat_map(|&i| nodes[i].children(i))
+            .filter(Option::is_none)
+            .count();
+        assert!(unstored > 100, "premise: {unstored} empty leaves");
+        assert!(
+            nodes[1..]
+                .iter()
+                .all(|n| !n.is_leaf() || n.prim_count() > 0),
+            "no empty leaf is stored below the root"
+        );
+        // A binary tree of `inner` inner nodes has `inner + 1` leaves: the
+        // stored ones and the marked ones.
+        assert_eq!(nodes.len() + unstored, 2 * inner.len() + 1);
+        let s = tree.stats();
+        assert_eq!(s.nodes, nodes.len());
+        assert_eq!(s.leaves, inner.len() + 1);
+        assert_eq!(s.empty_leaves, unstored);
+        let refs: usize = nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| n.prim_count() as usize)
+            .sum();
+        assert_eq!(s.references, refs);
+    }
+}
+
+#[test]
 fn teapot_in_a_stadium_isolates_the_teapot() {
     let mesh = teapot_in_stadium(5_000, 1.0e4);
     let tree = KdTree::new(&mesh).unwrap();

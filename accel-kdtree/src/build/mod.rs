@@ -6,6 +6,7 @@ pub(crate) mod events;
 pub(crate) mod sah;
 pub(crate) mod spares;
 pub(crate) mod split;
+mod unstored;
 
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
@@ -88,7 +89,7 @@ impl<T: Real> Out<T> {
     /// Sets the above child of inner node `at` to the next node appended.
     pub(crate) fn link_above(&mut self, at: usize) {
         let n = self.nodes[at];
-        let above = self.nodes.len().min(KdNode::MAX_COUNT as usize) as u32;
+        let above = self.nodes.len().min(KdNode::MAX_NODES as usize) as u32;
         self.nodes[at] = KdNode::inner(n.axis(), n.split_word(), above);
     }
 }
@@ -238,13 +239,13 @@ fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError>
     match piece {
         Piece::Flat(o) => {
             let total = out.nodes.len() + o.nodes.len();
-            if total > KdNode::MAX_COUNT as usize
+            if total > KdNode::MAX_NODES as usize
                 || out.refs.len() + o.refs.len() > u32::MAX as usize
             {
                 return Err(BuildError::BudgetExceeded {
-                    what: "kd-tree nodes (30-bit indices)",
+                    what: "kd-tree nodes (29-bit indices)",
                     needed: total as u64,
-                    budget: u64::from(KdNode::MAX_COUNT),
+                    budget: u64::from(KdNode::MAX_NODES),
                 });
             }
             let (nb, rb) = (out.nodes.len() as u32, out.refs.len() as u32);
@@ -340,6 +341,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             budget: params.max_references.min(u64::from(u32::MAX)),
         });
     }
+    unstored::drop_empty_leaves(&mut out);
     out.nodes.shrink_to_fit();
     out.refs.shrink_to_fit();
     out.splits.shrink_to_fit();
@@ -392,9 +394,11 @@ pub(crate) fn tree_stats<T: Real>(
         }
     };
     let (mut max_depth, mut depth_sum, mut sah_cost) = (0u32, 0u64, 0.0f64);
+    // Unstored empty leaves are pushed as this index, and read as one.
+    const EMPTY_LEAF: usize = usize::MAX;
     let mut stack = vec![(0usize, *bounds, 0u32)];
     while let Some((i, b, depth)) = stack.pop() {
-        let node = out.nodes[i];
+        let node = out.nodes.get(i).copied().unwrap_or(KdNode::leaf(0, 0));
         if node.is_leaf() {
             let count = node.prim_count() as usize;
             stats.leaves += 1;
@@ -408,8 +412,9 @@ pub(crate) fn tree_stats<T: Real>(
             sah_cost += params.traversal_cost * area_ratio(&b);
             let (axis, s) = (node.axis(), decode_split(node.split_word(), &out.splits));
             let (lo, hi) = b.split_at(axis, s);
-            stack.push((i + 1, lo, depth + 1));
-            stack.push((node.above_child() as usize, hi, depth + 1));
+            let [below, above] = node.children(i);
+            stack.push((below.unwrap_or(EMPTY_LEAF), lo, depth + 1));
+            stack.push((above.unwrap_or(EMPTY_LEAF), hi, depth + 1));
         }
     }
     stats.extra = vec![
