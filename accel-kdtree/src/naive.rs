@@ -9,6 +9,7 @@
 //! node for node; `KdTree::with_params_naive` exposes it to the tests.
 
 use crate::build::binned::{BoxSide, box_side, clip_to_node};
+use crate::build::depth::Depth;
 use crate::build::sah::{Sah, Split, keep_cheaper};
 use crate::build::{Ctx, Out};
 use accel_core::{Aabb, PrimitiveSet, Real};
@@ -43,7 +44,7 @@ pub(crate) fn build_naive<T: Real, P: PrimitiveSet<T> + ?Sized>(
             b: normalized(*b),
         })
         .collect();
-    node(ctx, items, bounds, 0, out);
+    node(ctx, items, bounds, Depth::ROOT, out);
 }
 
 /// The cheapest split by brute-force counting, or `None` for a leaf.
@@ -86,7 +87,7 @@ fn node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
     items: Vec<Item<T>>,
     bounds: Aabb<T>,
-    depth: u32,
+    depth: Depth,
     out: &mut Out<T>,
 ) {
     let split = if ctx.leaf_without_search(items.len(), depth) {
@@ -118,8 +119,9 @@ fn node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
         }
     }
+    let (below_depth, above_depth) = depth.children(&bounds, k, p, below.len(), above.len());
     let at = out.push_inner(k, p);
-    node(ctx, below, below_box, depth + 1, out);
+    node(ctx, below, below_box, below_depth, out);
     out.link_above(at);
-    node(ctx, above, above_box, depth + 1, out);
+    node(ctx, above, above_box, above_depth, out);
 }

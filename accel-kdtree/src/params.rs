@@ -37,7 +37,11 @@ pub struct KdTreeParams {
     /// 0.3 (pbrt: 0.5).
     pub empty_bonus: f64,
     /// Depth limit; `None` for pbrt's `round(8 + 1.3·floor(log2 n))`. At most
-    /// [`KdTreeParams::MAX_DEPTH`] (the traversal stack).
+    /// [`KdTreeParams::MAX_DEPTH`] (the traversal stack). A cut that keeps at
+    /// most 1/16 of its node's width, with at least 16 times the primitives
+    /// it cuts off, does not count for the kept child: it isolates a dense
+    /// part (a small mesh in a large sparse scene) that deserves the depth a
+    /// scene of its own would get. Paths never exceed `MAX_DEPTH` levels.
     pub max_depth: Option<u32>,
     /// Nodes with at most this many primitives become leaves without an SAH
     /// search (pbrt's `maxPrims`, which is 1; 0 means only the SAH decides).

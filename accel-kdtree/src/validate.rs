@@ -1,5 +1,7 @@
 //! The public invariant checker.
 
+use crate::KdTreeParams;
+use crate::build::depth::isolates;
 use crate::build::{decode_split, inline_splits};
 use crate::tree::KdTree;
 use accel_core::{PrimitiveSet, Real};
@@ -9,7 +11,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// root in depth-first order (below child next, above child after the
     /// below subtree), empty leaves not stored but marked in their parent
     /// (only an empty root is stored), splits finite and strictly inside their node's box,
-    /// depth within the limit, leaf runs tiling the reference array in order,
+    /// depth within the limit (counting every cut but those narrow enough
+    /// to isolate a dense part, see [`crate::KdTreeParams::max_depth`]) and
+    /// within the traversal stack, leaf runs tiling the reference array in order,
     /// each leaf's primitives strictly ascending, in range, with bounds
     /// touching the leaf's box, and every primitive in some leaf.
     ///
@@ -25,7 +29,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         let mut next_split = 0usize;
         let mut visited = 0usize;
         // Depth-first, below child first: the order the nodes are stored in.
-        let mut stack = vec![(0usize, self.bounds, 0u32)];
+        // Each entry: node, box, and its depth as (all levels, counted levels).
+        let mut stack = vec![(0usize, self.bounds, (0u32, 0u32))];
         while let Some((i, b, depth)) = stack.pop() {
             if i != visited {
                 return Err(format!(
@@ -33,12 +38,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                 ));
             }
             visited += 1;
-            if depth > self.depth_limit {
-                return Err(format!(
-                    "node {i} at depth {depth} beyond the limit {}",
-                    self.depth_limit
-                ));
-            }
+            check_depth(i, depth, self.depth_limit)?;
             let node = self.nodes[i];
             if node.is_leaf() {
                 let count = node.prim_count() as usize;
@@ -110,15 +110,18 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                 ));
             }
             let (lo, hi) = b.split_at(axis, s);
-            if depth + 1 > self.depth_limit && (below.is_none() || above.is_none()) {
-                return Err(format!(
-                    "node {i}: an empty leaf at depth {} beyond the limit {}",
-                    depth + 1,
-                    self.depth_limit
-                ));
+            let (w_lo, w_hi) = (s - b.min[axis], b.max[axis] - s);
+            let (levels, counted) = depth;
+            let child = |kept: T, cut: T| (levels + 1, counted + u32::from(!isolates(kept, cut)));
+            let (d_lo, d_hi) = (child(w_lo, w_hi), child(w_hi, w_lo));
+            // An unstored (empty) child is a leaf at its depth too.
+            for (c, d) in [(below, d_lo), (above, d_hi)] {
+                if c.is_none() {
+                    check_depth(i, d, self.depth_limit)?;
+                }
             }
-            stack.extend(above.map(|a| (a, hi, depth + 1)));
-            stack.extend(below.map(|b| (b, lo, depth + 1)));
+            stack.extend(above.map(|a| (a, hi, d_hi)));
+            stack.extend(below.map(|b| (b, lo, d_lo)));
         }
         if visited != self.nodes.len() {
             return Err(format!(
@@ -144,6 +147,24 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         }
         Ok(())
     }
+}
+
+/// Node `i`'s depth `(levels, counted)` (or its empty child's) is within
+/// the traversal stack and, counted, within `limit`. The build counts fewer
+/// cuts than the width alone lets pass, so this bounds its counted depth.
+fn check_depth(i: usize, (levels, counted): (u32, u32), limit: u32) -> Result<(), String> {
+    if levels > KdTreeParams::MAX_DEPTH {
+        return Err(format!(
+            "node {i}: {levels} levels deep, beyond the traversal stack ({})",
+            KdTreeParams::MAX_DEPTH
+        ));
+    }
+    if counted > limit {
+        return Err(format!(
+            "node {i}: {counted} counted levels deep, beyond the limit {limit}"
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@
 //! over. Where the bins find no split cheaper than a leaf, the exact sweep
 //! decides, so leaves are never made by the approximation.
 
+use super::depth::Depth;
 use super::events::{Events, push_events, sort_events};
 use super::sah::{Sah, Split};
 use super::split::NodeWork;
@@ -29,7 +30,7 @@ pub(crate) struct BinnedNode<T> {
     pub(crate) bounds: Aabb<T>,
     pub(crate) prims: Vec<u32>,
     pub(crate) boxes: Vec<Aabb<T>>,
-    pub(crate) depth: u32,
+    pub(crate) depth: Depth,
 }
 
 /// Nodes with at least this many primitives bin in parallel chunks.
@@ -175,8 +176,8 @@ pub(crate) fn split_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> (BinnedNode<T>, BinnedNode<T>) {
     let (k, p) = (split.axis, split.pos);
     let (left_box, right_box) = node.bounds.split_at(k, p);
-    let mut left = child(left_box, node.depth, node.prims.len() / 2);
-    let mut right = child(right_box, node.depth, node.prims.len() / 2);
+    let mut left = child(left_box, node.prims.len() / 2);
+    let mut right = child(right_box, node.prims.len() / 2);
     for (&g, b) in node.prims.iter().zip(&node.boxes) {
         match box_side(b, split) {
             BoxSide::Left => left.push(g, *b),
@@ -190,6 +191,9 @@ pub(crate) fn split_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
         }
     }
+    (left.depth, right.depth) =
+        node.depth
+            .children(&node.bounds, k, p, left.prims.len(), right.prims.len());
     (left, right)
 }
 
@@ -237,12 +241,13 @@ pub(crate) fn clip_to_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     (!c.is_empty()).then_some(c)
 }
 
-fn child<T: Real>(bounds: Aabb<T>, depth: u32, capacity: usize) -> BinnedNode<T> {
+/// An empty child (its depth is set once its primitives are known).
+fn child<T: Real>(bounds: Aabb<T>, capacity: usize) -> BinnedNode<T> {
     BinnedNode {
         bounds,
         prims: Vec::with_capacity(capacity),
         boxes: Vec::with_capacity(capacity),
-        depth: depth + 1,
+        depth: Depth::ROOT,
     }
 }
 
@@ -320,7 +325,7 @@ mod tests {
             bounds,
             prims: vec![0, 1, 2, 3],
             boxes: (0..4).map(|i| PrimitiveSet::bounds(&mesh, i)).collect(),
-            depth: 0,
+            depth: Depth::ROOT,
         };
         let split = Split {
             axis: 0,
@@ -335,6 +340,7 @@ mod tests {
         assert_eq!(right.prims, [1, 2, 3]);
         assert_eq!(left.boxes[1].max.x, 1.0);
         assert_eq!(right.boxes[2].min.x, 1.0);
-        assert_eq!((left.depth, right.depth), (1, 1));
+        assert_eq!((left.depth.counted, right.depth.counted), (1, 1));
+        assert_eq!((left.depth.levels, right.depth.levels), (1, 1));
     }
 }

@@ -2,6 +2,7 @@
 //! and the flattening of the pieces into one depth-first node array.
 
 pub(crate) mod binned;
+pub(crate) mod depth;
 pub(crate) mod events;
 pub(crate) mod sah;
 pub(crate) mod spares;
@@ -12,6 +13,7 @@ use crate::node::KdNode;
 use crate::params::KdTreeParams;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
 use binned::{BinnedNode, best_binned_split, split_binned};
+use depth::Depth;
 use events::{Events, push_axis_events, sort_events};
 use sah::{Sah, Split, best_split};
 use spares::Spares;
@@ -118,10 +120,10 @@ pub(crate) struct Ctx<'p, T, P: ?Sized> {
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
     /// True when a node of `n` primitives at `depth` is a leaf without a search.
-    pub(crate) fn leaf_without_search(&self, n: usize, depth: u32) -> bool {
+    pub(crate) fn leaf_without_search(&self, n: usize, depth: Depth) -> bool {
         n == 0
             || n <= self.params.leaf_size as usize
-            || depth >= self.depth_limit
+            || depth.exhausted(self.depth_limit)
             || self.failed.load(Ordering::Relaxed)
     }
 
@@ -319,7 +321,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds,
             prims: (0..n as u32).collect(),
             boxes,
-            depth: 0,
+            depth: Depth::ROOT,
         };
         flatten(build_binned(&ctx, root), &mut out)?;
     } else {
@@ -328,7 +330,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds,
             prims: (0..n as u32).collect(),
             events,
-            depth: 0,
+            depth: Depth::ROOT,
         };
         drop(boxes);
         let piece = build_piece(&ctx, root);

@@ -12,6 +12,7 @@
 //! linear in the node's events plus `s log s` for `s` straddlers.
 
 use super::binned::clip_to_node;
+use super::depth::Depth;
 use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
 use super::sah::Split;
 use super::spares::Spares;
@@ -24,7 +25,7 @@ pub(crate) struct NodeWork<T> {
     pub(crate) bounds: Aabb<T>,
     pub(crate) prims: Vec<u32>,
     pub(crate) events: Events<T>,
-    pub(crate) depth: u32,
+    pub(crate) depth: Depth,
 }
 
 /// Sides in a destination word: one bit each, none for a straddler (whose
@@ -175,6 +176,7 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
         right_events[a] = rights;
     }
     spares.give_words(dest);
+    let (below_depth, above_depth) = depth.children(&bounds, k, p, n_left, n_right);
     debug_assert!(left_events.iter().all(|l| l.len() >= n_left));
     debug_assert!(right_events.iter().all(|l| l.len() >= n_right));
     (
@@ -182,13 +184,13 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds: left_box,
             prims: left_prims,
             events: left_events,
-            depth: depth + 1,
+            depth: below_depth,
         },
         NodeWork {
             bounds: right_box,
             prims: right_prims,
             events: right_events,
-            depth: depth + 1,
+            depth: above_depth,
         },
     )
 }
