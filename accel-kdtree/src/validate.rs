@@ -1,7 +1,7 @@
 //! The public invariant checker.
 
 use crate::KdTreeParams;
-use crate::build::depth::isolates;
+use crate::build::depth::{Depth, isolates};
 use crate::build::{decode_split, inline_splits};
 use crate::tree::KdTree;
 use accel_core::{PrimitiveSet, Real};
@@ -29,8 +29,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         let mut next_split = 0usize;
         let mut visited = 0usize;
         // Depth-first, below child first: the order the nodes are stored in.
-        // Each entry: node, box, and its depth as (all levels, counted levels).
-        let mut stack = vec![(0usize, self.bounds, (0u32, 0u32))];
+        let mut stack = vec![(0usize, self.bounds, Depth::ROOT)];
         while let Some((i, b, depth)) = stack.pop() {
             if i != visited {
                 return Err(format!(
@@ -111,9 +110,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             }
             let (lo, hi) = b.split_at(axis, s);
             let (w_lo, w_hi) = (s - b.min[axis], b.max[axis] - s);
-            let (levels, counted) = depth;
-            let child = |kept: T, cut: T| (levels + 1, counted + u32::from(!isolates(kept, cut)));
-            let (d_lo, d_hi) = (child(w_lo, w_hi), child(w_hi, w_lo));
+            let (d_lo, d_hi) = (
+                depth.child(isolates(w_lo, w_hi)),
+                depth.child(isolates(w_hi, w_lo)),
+            );
             // An unstored (empty) child is a leaf at its depth too.
             for (c, d) in [(below, d_lo), (above, d_hi)] {
                 if c.is_none() {
@@ -149,10 +149,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     }
 }
 
-/// Node `i`'s depth `(levels, counted)` (or its empty child's) is within
-/// the traversal stack and, counted, within `limit`. The build counts fewer
-/// cuts than the width alone lets pass, so this bounds its counted depth.
-fn check_depth(i: usize, (levels, counted): (u32, u32), limit: u32) -> Result<(), String> {
+/// Node `i`'s depth (or its empty child's) is within the traversal stack
+/// and, counted, within `limit`. The build counts fewer cuts than the width
+/// alone lets pass, so this bounds its counted depth.
+fn check_depth(i: usize, Depth { counted, levels }: Depth, limit: u32) -> Result<(), String> {
     if levels > KdTreeParams::MAX_DEPTH {
         return Err(format!(
             "node {i}: {levels} levels deep, beyond the traversal stack ({})",

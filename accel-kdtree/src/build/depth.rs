@@ -56,14 +56,19 @@ impl Depth {
     ) -> (Self, Self) {
         let (below, above) = (pos - bounds.min[axis], bounds.max[axis] - pos);
         let many = |kept: usize, cut: usize| cut.saturating_mul(ISOLATION as usize) <= kept;
-        let child = |isolated: bool| Self {
+        (
+            self.child(isolates(below, above) && many(n_below, n_above)),
+            self.child(isolates(above, below) && many(n_above, n_below)),
+        )
+    }
+
+    /// The depth one level down, the cut counting unless `isolated`.
+    #[inline]
+    pub(crate) fn child(self, isolated: bool) -> Self {
+        Self {
             counted: self.counted + u32::from(!isolated),
             levels: self.levels + 1,
-        };
-        (
-            child(isolates(below, above) && many(n_below, n_above)),
-            child(isolates(above, below) && many(n_above, n_below)),
-        )
+        }
     }
 }
 

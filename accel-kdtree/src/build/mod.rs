@@ -396,11 +396,10 @@ pub(crate) fn tree_stats<T: Real>(
         }
     };
     let (mut max_depth, mut depth_sum, mut sah_cost) = (0u32, 0u64, 0.0f64);
-    // Unstored empty leaves are pushed as this index, and read as one.
-    const EMPTY_LEAF: usize = usize::MAX;
-    let mut stack = vec![(0usize, *bounds, 0u32)];
+    // `None` stands for an unstored empty leaf.
+    let mut stack = vec![(Some(0usize), *bounds, 0u32)];
     while let Some((i, b, depth)) = stack.pop() {
-        let node = out.nodes.get(i).copied().unwrap_or(KdNode::leaf(0, 0));
+        let node = i.map_or(KdNode::leaf(0, 0), |i| out.nodes[i]);
         if node.is_leaf() {
             let count = node.prim_count() as usize;
             stats.leaves += 1;
@@ -414,9 +413,10 @@ pub(crate) fn tree_stats<T: Real>(
             sah_cost += params.traversal_cost * area_ratio(&b);
             let (axis, s) = (node.axis(), decode_split(node.split_word(), &out.splits));
             let (lo, hi) = b.split_at(axis, s);
-            let [below, above] = node.children(i);
-            stack.push((below.unwrap_or(EMPTY_LEAF), lo, depth + 1));
-            stack.push((above.unwrap_or(EMPTY_LEAF), hi, depth + 1));
+            // An inner node is always stored: `i` is `Some` here.
+            let [below, above] = node.children(i.unwrap_or(0));
+            stack.push((below, lo, depth + 1));
+            stack.push((above, hi, depth + 1));
         }
     }
     stats.extra = vec![
