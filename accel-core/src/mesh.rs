@@ -2,7 +2,8 @@
 
 use crate::real::{greater, lesser};
 use crate::triangle::{
-    clip_triangle_bounds, intersect_triangle, triangle_overlaps_box, triangle_overlaps_boxes,
+    clip_triangle_bounds, clip_triangle_bounds_split, intersect_triangle, triangle_overlaps_box,
+    triangle_overlaps_boxes,
 };
 use crate::{Aabb, PreparedRay, PrimHit, PrimitiveSet, Real, Vec3};
 
@@ -196,6 +197,12 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         let [p0, p1, p2] = self.triangle(i);
         clip_triangle_bounds(p0, p1, p2, b)
+    }
+
+    #[inline]
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        let [p0, p1, p2] = self.triangle(i);
+        clip_triangle_bounds_split(p0, p1, p2, b, axis, s)
     }
 }
 

@@ -211,6 +211,11 @@ impl<T: Real> PrimitiveSet<T> for MollerTrumboreMesh<'_, T> {
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.mesh.clipped_bounds(i, b)
     }
+
+    #[inline]
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        self.mesh.clipped_bounds_split(i, b, axis, s)
+    }
 }
 
 #[cfg(test)]

@@ -101,6 +101,20 @@ pub trait PrimitiveSet<T: Real>: Sync {
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.bounds(i).intersection(b)
     }
+
+    /// [`PrimitiveSet::clipped_bounds`] for the two halves of `b` cut at
+    /// `x[axis] = s` (below, then above, as [`Aabb::split_at`]): what a
+    /// kD-tree build asks of each primitive its split plane straddles. It
+    /// must equal the two calls; a set whose clipper can share their work
+    /// overrides it ([`crate::TriangleMesh`] does). The default makes the
+    /// two calls.
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        let (below, above) = b.split_at(axis, s);
+        [
+            self.clipped_bounds(i, &below),
+            self.clipped_bounds(i, &above),
+        ]
+    }
 }
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {

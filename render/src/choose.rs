@@ -756,6 +756,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> PrimitiveSet<T> for Subsample<'_, T, 
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.prims.clipped_bounds(self.index[i], b)
     }
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        self.prims.clipped_bounds_split(self.index[i], b, axis, s)
+    }
 }
 
 /// Predicted full build time from a build on the subsample: scaled by `n`

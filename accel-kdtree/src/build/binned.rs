@@ -183,8 +183,9 @@ pub(crate) fn split_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
             BoxSide::Left => left.push(g, *b),
             BoxSide::Right => right.push(g, *b),
             BoxSide::Both => {
-                for side in [&mut left, &mut right] {
-                    if let Some(c) = clip_to_node(prims, g, &side.bounds) {
+                let clipped = clip_to_halves(prims, g, &node.bounds, split);
+                for (side, c) in [&mut left, &mut right].into_iter().zip(clipped) {
+                    if let Some(c) = c {
                         side.push(g, c);
                     }
                 }
@@ -239,6 +240,21 @@ pub(crate) fn clip_to_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> Option<Aabb<T>> {
     let c = prims.clipped_bounds(g as usize, child).intersection(child);
     (!c.is_empty()).then_some(c)
+}
+
+/// Primitive `g` clipped to each half of `node` at `split` (below, then
+/// above), as [`clip_to_node`] would clip it to each, in one call that
+/// shares the two clips' work.
+#[inline]
+pub(crate) fn clip_to_halves<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+    g: u32,
+    node: &Aabb<T>,
+    split: &Split<T>,
+) -> [Option<Aabb<T>>; 2] {
+    let (below, above) = node.split_at(split.axis, split.pos);
+    let [b, a] = prims.clipped_bounds_split(g as usize, node, split.axis, split.pos);
+    [b.intersection(&below), a.intersection(&above)].map(|c| (!c.is_empty()).then_some(c))
 }
 
 /// An empty child (its depth is set once its primitives are known).

@@ -11,7 +11,7 @@
 //! and merged into the child's lists. Nothing is re-sorted: the split is
 //! linear in the node's events plus `s log s` for `s` straddlers.
 
-use super::binned::clip_to_node;
+use super::binned::clip_to_halves;
 use super::depth::Depth;
 use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
 use super::sah::Split;
@@ -142,11 +142,15 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 right_prims.push(g);
             }
             _ => {
-                for (child_box, child_prims, new) in [
-                    (&left_box, &mut left_prims, &mut left_new),
-                    (&right_box, &mut right_prims, &mut right_new),
-                ] {
-                    if let Some(c) = clip_to_node(prims, g, child_box) {
+                let clipped = clip_to_halves(prims, g, &bounds, split);
+                for ((child_prims, new), c) in [
+                    (&mut left_prims, &mut left_new),
+                    (&mut right_prims, &mut right_new),
+                ]
+                .into_iter()
+                .zip(clipped)
+                {
+                    if let Some(c) = c {
                         push_events(new, child_prims.len() as u32, &c);
                         child_prims.push(g);
                     }
