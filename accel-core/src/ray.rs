@@ -120,7 +120,8 @@ impl<T: Real> Ray<T> {
 /// A validated ray with the constants that every primitive test reuses:
 /// the reciprocal direction and the shear of the watertight triangle test
 /// (Woop, Benthin & Wald 2013: the axis `kz` of the largest direction
-/// component, the two others `kx`, `ky`, and `S = (dx/dz, dy/dz, 1/dz)`).
+/// component, the two others `kx`, `ky`, and `S = (dx/dz, dy/dz, 1/dz)`,
+/// in `f64`).
 #[derive(Clone, Copy, Debug)]
 pub struct PreparedRay<T> {
     /// The ray.
@@ -129,8 +130,12 @@ pub struct PreparedRay<T> {
     pub inv_dir: Vec3<T>,
     /// Permuted axes `[kx, ky, kz]`, `kz` the dominant direction axis.
     pub axes: [usize; 3],
-    /// Shear constants `(Sx, Sy, Sz)`.
-    pub shear: Vec3<T>,
+    /// Shear constants `(Sx, Sy, Sz)`, in `f64` whatever `T` (the triangle
+    /// test runs in `f64`): for an `f32` ray each is the exact quotient of
+    /// its components rounded once to `f64`, not to `f32`, whose rounding
+    /// tilts the sheared ray enough to miss a triangle the exact ray
+    /// passes through by 1e-10 of its edge functions' scale.
+    pub shear: Vec3<f64>,
 }
 
 impl<T: Real> PreparedRay<T> {
@@ -147,7 +152,8 @@ impl<T: Real> PreparedRay<T> {
         if d[kz] < T::ZERO {
             core::mem::swap(&mut kx, &mut ky);
         }
-        let shear = Vec3::new(d[kx] / d[kz], d[ky] / d[kz], T::ONE / d[kz]);
+        let w = d.map(T::to_f64);
+        let shear = Vec3::new(w[kx] / w[kz], w[ky] / w[kz], 1.0 / w[kz]);
         Self {
             ray,
             inv_dir: Vec3::new(T::ONE / d.x, T::ONE / d.y, T::ONE / d.z),
