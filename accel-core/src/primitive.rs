@@ -60,6 +60,15 @@ pub trait Primitive<T: Real>: Sync {
     fn clipped_bounds(&self, b: &Aabb<T>) -> Aabb<T> {
         self.bounds().intersection(b)
     }
+
+    /// [`Primitive::clipped_bounds`] for the two halves of `b` cut at
+    /// `x[axis] = s` (below, then above, as [`Aabb::split_at`]). It must
+    /// equal the two calls; the default makes them, and
+    /// [`crate::Triangle`] shares their work.
+    fn clipped_bounds_split(&self, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        let (below, above) = b.split_at(axis, s);
+        [self.clipped_bounds(&below), self.clipped_bounds(&above)]
+    }
 }
 
 /// An indexed collection of primitives: a triangle mesh, a slice of spheres,
@@ -142,6 +151,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self[i].clipped_bounds(b)
     }
+    #[inline]
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        self[i].clipped_bounds_split(b, axis, s)
+    }
 }
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
@@ -168,5 +181,9 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
     #[inline]
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self[i].clipped_bounds(b)
+    }
+    #[inline]
+    fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        self[i].clipped_bounds_split(b, axis, s)
     }
 }

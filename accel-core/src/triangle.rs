@@ -621,6 +621,11 @@ impl<T: Real> Primitive<T> for Triangle<T> {
         let [p0, p1, p2] = self.vertices;
         clip_triangle_bounds(p0, p1, p2, b)
     }
+
+    fn clipped_bounds_split(&self, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
+        let [p0, p1, p2] = self.vertices;
+        clip_triangle_bounds_split(p0, p1, p2, b, axis, s)
+    }
 }
 
 #[cfg(test)]
