@@ -78,7 +78,8 @@ pub struct PeersArgs {
     pub max_pass_time: f64,
     /// Build every tool this many times, in interleaved rounds (ours, then
     /// each peer, then again), and report each one's median build: on a
-    /// shared machine one build per tool compares minutes, not tools.
+    /// shared machine one build per tool compares minutes, not tools. Each
+    /// timed build follows an untimed one of the same tool.
     #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
     pub build_rounds: u32,
     /// Write the results as JSON to this file.
@@ -295,6 +296,13 @@ struct Built<'a> {
 /// Builds every tool in `rounds` interleaved rounds. A peer that fails in
 /// the first round is not tried again; one that fails later keeps the
 /// rounds it built.
+///
+/// Each timed build comes right after an untimed build of the same tool, so
+/// that no tool is timed in the state another tool left behind: Embree's
+/// default mode, built right after the bvh crate, took 1.5–1.8 times as
+/// long as its robust mode built next, and with the two swapped the robust
+/// mode was the slow one (the second Embree build matched a standalone C
+/// program's).
 fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<'_>> {
     let n = mesh.triangle_count();
     let peer_mesh = PeerMesh::new(mesh);
@@ -313,6 +321,9 @@ fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<
             None => times.push((name, is_ours, vec![d])),
         };
         for kind in ours {
+            // Every timed build follows an untimed one of the same tool
+            // (see the function's comment).
+            drop(accel::build_config(&AccelConfig::default_for(kind), mesh)?);
             let start = Instant::now();
             let accel = accel::build_config(&AccelConfig::default_for(kind), mesh)?;
             record(kind.name(), true, start.elapsed());
@@ -336,7 +347,11 @@ fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<
             if !first && failed.iter().any(|(f, _): &(String, String)| f == name) {
                 continue;
             }
-            match build(&peer_mesh) {
+            let warm_then_timed = build(&peer_mesh).and_then(|warm| {
+                drop(warm);
+                build(&peer_mesh)
+            });
+            match warm_then_timed {
                 Ok(built) => {
                     record(name, false, built.build);
                     if first {
