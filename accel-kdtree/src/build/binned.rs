@@ -230,15 +230,22 @@ pub(crate) fn box_side<T: Real>(b: &Aabb<T>, split: &Split<T>) -> BoxSide {
 }
 
 /// Primitive `g` clipped to a child's box, `None` where nothing of it lies
-/// inside. Intersected again: a user's clipper cannot leak a box outside the
-/// node.
+/// inside ([`within`]).
 #[inline]
 pub(crate) fn clip_to_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
     g: u32,
     child: &Aabb<T>,
 ) -> Option<Aabb<T>> {
-    let c = prims.clipped_bounds(g as usize, child).intersection(child);
+    within(prims.clipped_bounds(g as usize, child), child)
+}
+
+/// A clipped box kept inside its child: intersected again, since a user's
+/// clipper cannot be trusted not to leak outside the node; `None` when
+/// nothing of it is left.
+#[inline]
+fn within<T: Real>(clipped: Aabb<T>, child: &Aabb<T>) -> Option<Aabb<T>> {
+    let c = clipped.intersection(child);
     (!c.is_empty()).then_some(c)
 }
 
@@ -254,7 +261,7 @@ pub(crate) fn clip_to_halves<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> [Option<Aabb<T>>; 2] {
     let (below, above) = node.split_at(split.axis, split.pos);
     let [b, a] = prims.clipped_bounds_split(g as usize, node, split.axis, split.pos);
-    [b.intersection(&below), a.intersection(&above)].map(|c| (!c.is_empty()).then_some(c))
+    [within(b, &below), within(a, &above)]
 }
 
 /// An empty child (its depth is set once its primitives are known).
