@@ -29,6 +29,14 @@
 //! builder with the same candidates and costs is kept as the reference the
 //! sweep must match node for node.
 //!
+//! **Large primitives.** A plane in a node's face is a candidate where
+//! primitives lie flat in that face (a *face cut*: they go to a flat child
+//! there), so a wall on a node's boundary can be cut away from the space in
+//! front of it. And a small dense part of a large sparse scene (a teapot in
+//! a stadium: walls and floor straddle every plane around the teapot, so the
+//! SAH finds no empty cut) is built as a tree of its own beside a tree of
+//! the large primitives ([`KdTree::parts`]); queries walk both.
+//!
 //! **Layout.** 8-byte nodes as pbrt's `KdTreeNode` ([`KdNode`]): axis or leaf
 //! flag in two bits, then a leaf's 30-bit primitive count or an inner node's
 //! 29-bit above-child index and a flag for an empty below child, and a word
@@ -69,6 +77,7 @@ mod traverse;
 mod tree;
 mod validate;
 
+pub use build::KdPart;
 pub use node::KdNode;
 pub use params::KdTreeParams;
 pub use tree::KdTree;

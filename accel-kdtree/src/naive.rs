@@ -1,6 +1,7 @@
 //! The naive O(n²) SAH builder: the reference the event sweep must match.
 //!
-//! Same candidates (every clipped-bounds face strictly inside the node), same
+//! Same candidates (every clipped-bounds face strictly inside the node, and
+//! the face cuts of [`crate::build::sah`]), same
 //! costs ([`Sah`]), same tie-breaks (axis, then position, first strictly
 //! cheapest), same clipping policy (only straddlers are clipped anew), but
 //! none of the machinery: each node keeps `(primitive, clipped box)` pairs,
@@ -29,18 +30,20 @@ fn normalized<T: Real>(b: Aabb<T>) -> Aabb<T> {
     }
 }
 
-/// Builds the whole tree into `out`.
+/// Builds the tree of the primitives `list` (bounds `boxes`, in the same
+/// order) into `out`.
 pub(crate) fn build_naive<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
+    list: &[u32],
     boxes: &[Aabb<T>],
     bounds: Aabb<T>,
     out: &mut Out<T>,
 ) {
-    let items = boxes
+    let items = list
         .iter()
-        .enumerate()
-        .map(|(i, b)| Item {
-            prim: i as u32,
+        .zip(boxes)
+        .map(|(&prim, b)| Item {
+            prim,
             b: normalized(*b),
         })
         .collect();
@@ -58,16 +61,19 @@ fn choose<T: Real>(sah: &Sah, items: &[Item<T>]) -> Option<Split<T>> {
         planes.sort_unstable_by(|a, b| a.partial_cmp(b).expect("finite"));
         planes.dedup();
         for &p in &planes {
-            if !sah.is_candidate(k, p.to_f64()) {
-                continue;
-            }
-            let nl = items.iter().filter(|it| it.b.min[k] < p).count();
-            let nr = items.iter().filter(|it| it.b.max[k] > p).count();
             let np = items
                 .iter()
                 .filter(|it| it.b.min[k] == p && it.b.max[k] == p)
                 .count();
-            let (cost, planar_left) = sah.evaluate(k, p.to_f64(), nl, np, nr);
+            let (cost, planar_left) = if sah.is_candidate(k, p.to_f64()) {
+                let nl = items.iter().filter(|it| it.b.min[k] < p).count();
+                let nr = items.iter().filter(|it| it.b.max[k] > p).count();
+                sah.evaluate(k, p.to_f64(), nl, np, nr)
+            } else if let Some(face) = sah.face_cut(k, p.to_f64(), np, items.len()) {
+                face
+            } else {
+                continue;
+            };
             keep_cheaper(
                 &mut best,
                 Split {

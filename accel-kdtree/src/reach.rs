@@ -21,8 +21,8 @@ pub(crate) fn node_reaches<T: Real, P: PrimitiveSet<T> + ?Sized>(
     tree: &KdTree<'_, T, P>,
 ) -> Vec<T> {
     let mut reach = vec![T::ZERO; tree.nodes.len()];
-    if !tree.nodes.is_empty() {
-        reach_box(tree, 0, tree.bounds, &mut reach);
+    for part in &tree.parts {
+        reach_box(tree, part.root, part.bounds, &mut reach);
     }
     reach
 }
@@ -166,14 +166,22 @@ mod tests {
 
     #[test]
     fn a_tree_narrows_its_beam_only_where_the_scene_dwarfs_its_primitives() {
-        use accel_core::TriangleMesh;
-        use accel_core::scenes::teapot_in_stadium;
+        use accel_core::scenes::{box_mesh, uv_sphere};
+        use accel_core::{TriangleMesh, Vec3};
         // The same dense sphere (triangles about 0.06 across) in a stadium of
         // side 10^4, where the query beam is about 0.02 wide, and of side 10,
-        // where it is about 2e-5.
+        // where it is about 2e-5. The walls are tiled 20 × 20 per face, so
+        // no triangle is large enough for the scene to be built in parts
+        // (`crate::build::parts`), where each part's beam is its own, and
+        // the median triangle is still one of the sphere's.
         for (stadium, narrows) in [(1e4, true), (10.0, false)] {
-            let mesh: TriangleMesh<f32> = teapot_in_stadium(5000, stadium).cast().unwrap();
+            let mut mesh = uv_sphere(Vec3::ZERO, 1.0, 8000);
+            let h = stadium / 2.0;
+            mesh.append(&box_mesh(&Aabb::new(Vec3::splat(-h), Vec3::splat(h)), 20))
+                .unwrap();
+            let mesh: TriangleMesh<f32> = mesh.cast().unwrap();
             let tree = KdTree::new(&mesh).unwrap();
+            assert_eq!(tree.parts().len(), 1, "premise: one part");
             assert_eq!(!tree.reach.is_empty(), narrows, "stadium {stadium}");
         }
     }

@@ -13,7 +13,9 @@
 //! holds ([`crate::reach`]): a small dense mesh in a large scene is walked
 //! with a beam as thin as if it stood alone. A node is skipped once the best hit, plus the hit tolerance
 //! `t_tol`, lies before the node's entry; a per-query [`Mailbox`] tests each
-//! primitive once.
+//! primitive once. A tree in two parts ([`crate::KdTree::parts`]) is walked
+//! part by part, each with the beam of its own bounds, the later ones with
+//! the best hit of the earlier.
 
 use crate::build::decode_split;
 use crate::reach::node_beam;
@@ -161,6 +163,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     #[inline]
     fn walk<V: Visitor<T>, C: CostCounter>(
         &self,
+        root: usize,
         tr: &TraversalRay<T>,
         v: &mut V,
         counter: &mut C,
@@ -169,10 +172,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             .iter()
             .all(|&a| tr.prepared.inv_dir[a].is_finite());
         match (self.reach.is_empty(), finite) {
-            (true, true) => self.walk_with::<false, true, V, C>(tr, v, counter),
-            (true, false) => self.walk_with::<false, false, V, C>(tr, v, counter),
-            (false, true) => self.walk_with::<true, true, V, C>(tr, v, counter),
-            (false, false) => self.walk_with::<true, false, V, C>(tr, v, counter),
+            (true, true) => self.walk_with::<false, true, V, C>(root, tr, v, counter),
+            (true, false) => self.walk_with::<false, false, V, C>(root, tr, v, counter),
+            (false, true) => self.walk_with::<true, true, V, C>(root, tr, v, counter),
+            (false, false) => self.walk_with::<true, false, V, C>(root, tr, v, counter),
         }
     }
 
@@ -188,6 +191,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     #[inline]
     fn walk_with<const NARROW: bool, const FINITE: bool, V: Visitor<T>, C: CostCounter>(
         &self,
+        root: usize,
         tr: &TraversalRay<T>,
         v: &mut V,
         counter: &mut C,
@@ -208,7 +212,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         let mut cutoff = v.cutoff();
         let mut stack = [(0u32, T::ZERO, T::ZERO); STACK];
         let mut sp = 0;
-        let (mut idx, mut t0, mut t1) = (0usize, tr.t_start, tr.t_end);
+        let (mut idx, mut t0, mut t1) = (root, tr.t_start, tr.t_end);
         loop {
             if t0 <= cutoff {
                 let node = &self.nodes[idx];
@@ -281,38 +285,50 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         }
     }
 
+    /// The nearest hit: each part walked in turn, with the best hit so far
+    /// (each with the beam of its own bounds).
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
     ) -> Result<Option<Hit<T>>, QueryError> {
         ray.validate()?;
-        let Some(tr) = TraversalRay::new(ray, &self.bounds) else {
-            return Ok(None);
-        };
-        let mut v = Nearest {
-            prims: self.prims,
-            tr: &tr,
-            mailbox: Mailbox::new(),
-            best: None,
-        };
-        self.walk(&tr, &mut v, counter);
-        Ok(v.best)
+        let mut best = None;
+        for part in &self.parts {
+            let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+                continue;
+            };
+            let mut v = Nearest {
+                prims: self.prims,
+                tr: &tr,
+                mailbox: Mailbox::new(),
+                best,
+            };
+            self.walk(part.root, &tr, &mut v, counter);
+            best = v.best;
+        }
+        Ok(best)
     }
 
+    /// Any hit, part by part.
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
         ray.validate()?;
-        let Some(tr) = TraversalRay::new(ray, &self.bounds) else {
-            return Ok(false);
-        };
-        let mut v = AnyHit {
-            prims: self.prims,
-            tr: &tr,
-            mailbox: Mailbox::new(),
-            found: false,
-        };
-        self.walk(&tr, &mut v, counter);
-        Ok(v.found)
+        for part in &self.parts {
+            let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+                continue;
+            };
+            let mut v = AnyHit {
+                prims: self.prims,
+                tr: &tr,
+                mailbox: Mailbox::new(),
+                found: false,
+            };
+            self.walk(part.root, &tr, &mut v, counter);
+            if v.found {
+                return Ok(true);
+            }
+        }
+        Ok(false)
     }
 }
 
@@ -360,7 +376,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
         let grown = region_search_box(region, &self.bounds);
         let mut found: Vec<u32> = Vec::new();
         if grown.overlaps(&self.bounds) {
-            let mut stack = vec![0usize];
+            let mut stack: Vec<usize> = self
+                .parts
+                .iter()
+                .filter(|p| grown.overlaps(&p.bounds))
+                .map(|p| p.root)
+                .collect();
             while let Some(i) = stack.pop() {
                 let node = &self.nodes[i];
                 if node.is_leaf() {

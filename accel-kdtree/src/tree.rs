@@ -1,6 +1,6 @@
 //! The kD-tree: its parts and constructors.
 
-use crate::build::{Out, build, decode_split, tree_stats};
+use crate::build::{KdPart, Out, build, decode_split, tree_stats};
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
 use crate::reach::{narrowing_pays, node_reaches};
@@ -20,8 +20,9 @@ pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     /// Per node, how far its primitives reach ([`crate::reach`]); empty
     /// where narrowing the beam would not pay ([`narrowing_pays`]).
     pub(crate) reach: Vec<T>,
+    /// The scene's bounds (every part's box lies inside).
     pub(crate) bounds: Aabb<T>,
-    pub(crate) depth_limit: u32,
+    pub(crate) parts: Vec<KdPart<T>>,
     pub(crate) stats: AccelStats,
 }
 
@@ -58,13 +59,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
 
     fn assemble(prims: &'a P, params: &KdTreeParams, naive: bool) -> Result<Self, BuildError> {
         let built = build(prims, params, naive)?;
-        let mut stats = tree_stats(
-            &built.out,
-            &built.bounds,
-            params,
-            built.depth_limit,
-            prims.len(),
-        );
+        let mut stats = tree_stats(&built.out, &built.parts, &built.bounds, params, prims.len());
         stats.build_time = built.build_time;
         let Out {
             nodes,
@@ -78,10 +73,13 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             splits,
             reach: Vec::new(),
             bounds: built.bounds,
-            depth_limit: built.depth_limit,
+            parts: built.parts,
             stats,
         };
-        if narrowing_pays(&tree) {
+        // A tree in parts has walked each part with a beam as thin as its own
+        // bounds allow: the narrowing is for a small dense part left inside
+        // one large tree.
+        if tree.parts.len() == 1 && narrowing_pays(&tree) {
             tree.reach = node_reaches(&tree);
             tree.stats.bytes += tree.reach.capacity() * size_of::<T>();
         }
@@ -92,10 +90,10 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
         Ok(tree)
     }
 
-    /// The nodes, depth-first: node 0 is the root, an inner node's below
-    /// child follows it, its above child is at [`KdNode::above_child`]; an
-    /// empty leaf is not stored but marked in its parent
-    /// ([`KdNode::children`]).
+    /// The nodes, depth-first: node 0 is the root (of the first part, see
+    /// [`KdTree::parts`]), an inner node's below child follows it, its above
+    /// child is at [`KdNode::above_child`]; an empty leaf is not stored but
+    /// marked in its parent ([`KdNode::children`]).
     #[must_use]
     pub fn nodes(&self) -> &[KdNode] {
         &self.nodes
@@ -131,10 +129,20 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
         }
     }
 
-    /// The depth limit the build used.
+    /// The depth limit the build used (the first part's; see
+    /// [`KdTree::parts`]).
     #[must_use]
     pub fn depth_limit(&self) -> u32 {
-        self.depth_limit
+        self.parts.first().map_or(0, |p| p.depth_limit)
+    }
+
+    /// The tree's parts, each a tree of its own in [`KdTree::nodes`]: one,
+    /// or two where a small dense part of a large sparse scene is built
+    /// apart from the large primitives around it (the small part first).
+    /// Every primitive is in exactly one part; queries walk them all.
+    #[must_use]
+    pub fn parts(&self) -> &[KdPart<T>] {
+        &self.parts
     }
 
     /// The indexed primitives.

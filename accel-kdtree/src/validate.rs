@@ -4,13 +4,13 @@ use crate::KdTreeParams;
 use crate::build::depth::{Depth, isolates};
 use crate::build::{decode_split, inline_splits};
 use crate::tree::KdTree;
-use accel_core::{PrimitiveSet, Real};
+use accel_core::{Aabb, PrimitiveSet, Real};
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// Checks the tree's invariants: every node reached exactly once from the
-    /// root in depth-first order (below child next, above child after the
+    /// roots of the parts, one part after the other, in depth-first order (below child next, above child after the
     /// below subtree), empty leaves not stored but marked in their parent
-    /// (only an empty root is stored), splits finite and strictly inside their node's box,
+    /// (only an empty root is stored), splits finite and inside their node's box (on a face only for a face cut),
     /// depth within the limit (counting every cut but those narrow enough
     /// to isolate a dense part, see [`crate::KdTreeParams::max_depth`]) and
     /// within the traversal stack, leaf runs tiling the reference array in order,
@@ -29,15 +29,21 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         let mut next_split = 0usize;
         let mut visited = 0usize;
         // Depth-first, below child first: the order the nodes are stored in.
-        let mut stack = vec![(0usize, self.bounds, Depth::ROOT)];
-        while let Some((i, b, depth)) = stack.pop() {
+        // The parts one after the other, each from its root.
+        let mut stack: Vec<(usize, Aabb<T>, Depth, u32)> = self
+            .parts
+            .iter()
+            .rev()
+            .map(|p| (p.root, p.bounds, Depth::ROOT, p.depth_limit))
+            .collect();
+        while let Some((i, b, depth, limit)) = stack.pop() {
             if i != visited {
                 return Err(format!(
                     "node {i} reached out of depth-first order (expected {visited})"
                 ));
             }
             visited += 1;
-            check_depth(i, depth, self.depth_limit)?;
+            check_depth(i, depth, limit)?;
             let node = self.nodes[i];
             if node.is_leaf() {
                 let count = node.prim_count() as usize;
@@ -90,9 +96,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                 next_split += 1;
             }
             let s = decode_split(node.split_word(), &self.splits);
-            if !(s.is_finite() && b.min[axis] < s && s < b.max[axis]) {
+            // Inside, or on a face of a node that is not flat there (a face
+            // cut, which gives one child no width).
+            if !(s.is_finite() && b.min[axis] <= s && s <= b.max[axis] && b.min[axis] < b.max[axis])
+            {
                 return Err(format!(
-                    "node {i}: split {s} on axis {axis} not strictly inside [{}, {}]",
+                    "node {i}: split {s} on axis {axis} not inside [{}, {}]",
                     b.min[axis], b.max[axis]
                 ));
             }
@@ -117,11 +126,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             // An unstored (empty) child is a leaf at its depth too.
             for (c, d) in [(below, d_lo), (above, d_hi)] {
                 if c.is_none() {
-                    check_depth(i, d, self.depth_limit)?;
+                    check_depth(i, d, limit)?;
                 }
             }
-            stack.extend(above.map(|a| (a, hi, d_hi)));
-            stack.extend(below.map(|b| (b, lo, d_lo)));
+            stack.extend(above.map(|a| (a, hi, d_hi, limit)));
+            stack.extend(below.map(|b| (b, lo, d_lo, limit)));
         }
         if visited != self.nodes.len() {
             return Err(format!(
@@ -211,7 +220,7 @@ mod tests {
         let mut t = KdTree::with_params(&m, &params()).unwrap();
         let n = t.nodes[inner];
         t.splits[n.split_word() as usize] = 1e9;
-        assert!(t.validate().unwrap_err().contains("not strictly inside"));
+        assert!(t.validate().unwrap_err().contains("not inside"));
 
         // A leaf pointing at another leaf's references.
         let mut t = KdTree::with_params(&m, &params()).unwrap();

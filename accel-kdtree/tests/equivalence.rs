@@ -5,7 +5,7 @@
 //! t windows, several cost settings, in f32 and f64. (The workspace-wide
 //! suites in the `tests` crate go further; this one guards the tree itself.)
 
-use accel_core::scenes::{terrain, torus, uv_sphere};
+use accel_core::scenes::{teapot_in_stadium, terrain, torus, uv_sphere};
 use accel_core::{Aabb, Accelerator, BruteForce, Ray, Real, TriangleMesh, Vec3};
 use accel_kdtree::{KdTree, KdTreeParams};
 use proptest::prelude::*;
@@ -19,7 +19,8 @@ enum SceneSpec {
     Lattice(Vec<[[i8; 3]; 3]>, f64, f64),
     /// Free random triangles in the unit cube.
     Soup(Vec<[[f64; 3]; 3]>),
-    /// A closed mesh: 0 sphere, 1 torus, 2 terrain; scale and offset.
+    /// A closed mesh: 0 sphere, 1 torus, 2 terrain, 3 a sphere in a stadium
+    /// (built in two parts, the walls and floor apart); scale and offset.
     Mesh(u8, f64, f64),
 }
 
@@ -46,7 +47,8 @@ impl SceneSpec {
                 let m = match kind {
                     0 => uv_sphere(Vec3::ZERO, 1.0, 200),
                     1 => torus(Vec3::ZERO, 1.0, 0.4, 12, 8),
-                    _ => terrain(300, 3),
+                    2 => terrain(300, 3),
+                    _ => teapot_in_stadium(300, 200.0),
                 };
                 let p = m
                     .positions()
@@ -84,7 +86,7 @@ fn scene_strategy() -> impl Strategy<Value = SceneSpec> {
     )
     .prop_map(SceneSpec::Soup);
     let mesh = (
-        0u8..3,
+        0u8..4,
         prop::sample::select(vec![1.0, 0.01, 50.0]),
         prop::sample::select(vec![0.0, 7.0]),
     )
@@ -268,6 +270,7 @@ fn check<T: Real>(
         T::NAME
     );
     prop_assert_eq!(tree.references(), naive.references());
+    prop_assert_eq!(tree.parts(), naive.parts());
     for i in 0..tree.nodes().len() {
         prop_assert_eq!(
             tree.split_position(i).map(|s| s.to_bits_u64()),

@@ -1,7 +1,7 @@
 //! The tree's shape: real splits, the naive build on a scene large enough to
 //! be built in parallel, named edge cases, and typed errors.
 
-use accel_core::scenes::{random_soup, teapot_in_stadium, uv_sphere};
+use accel_core::scenes::{box_mesh, random_soup, teapot_in_stadium, uv_sphere};
 use accel_core::{Aabb, Accelerator, BruteForce, BuildError, Ray, Sphere, TriangleMesh, Vec3};
 use accel_kdtree::{KdTree, KdTreeParams};
 
@@ -11,12 +11,24 @@ fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized
 ) {
     assert_eq!(a.nodes(), b.nodes());
     assert_eq!(a.references(), b.references());
+    assert_eq!(a.parts(), b.parts());
     for i in 0..a.nodes().len() {
         assert_eq!(
             a.split_position(i).map(|s| s.to_bits_u64()),
             b.split_position(i).map(|s| s.to_bits_u64())
         );
     }
+}
+
+/// A sphere of `dense` triangles in a box of side `stadium` whose faces are
+/// tiled 20 × 20: no triangle is large enough for the scene to be built in
+/// parts, so one tree must isolate the sphere.
+fn tiled_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
+    let mut mesh = uv_sphere(Vec3::ZERO, 1.0, dense);
+    let h = stadium / 2.0;
+    mesh.append(&box_mesh(&Aabb::new(Vec3::splat(-h), Vec3::splat(h)), 20))
+        .unwrap();
+    mesh
 }
 
 #[test]
@@ -26,12 +38,20 @@ fn sweep_equals_naive_on_a_parallel_build() {
     let mut mesh = random_soup(3000, 5);
     mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 800))
         .unwrap();
-    // And a sphere in a box 10^4 times wider, whose isolating cuts do not
-    // count towards the depth limit (in either builder).
-    for mesh in [mesh, teapot_in_stadium(3000, 1.0e4)] {
+    // And a sphere in a box 10^4 times wider: with walls tiled finely, one
+    // tree whose isolating cuts do not count towards the depth limit; with
+    // walls of two triangles each, two parts (in either builder).
+    for mesh in [
+        mesh,
+        tiled_stadium(3000, 1.0e4),
+        teapot_in_stadium(3000, 1.0e4),
+    ] {
         for params in [
             KdTreeParams {
                 parallel_threshold: 64,
+                // Exact splits throughout: the naive builder has no bins
+                // (the tiled stadium has 7,800 triangles).
+                binned_above: usize::MAX,
                 ..KdTreeParams::default()
             },
             KdTreeParams {
@@ -146,12 +166,13 @@ fn empty_leaves_are_marked_not_stored_and_still_counted() {
                 .all(|n| !n.is_leaf() || n.prim_count() > 0),
             "no empty leaf is stored below the root"
         );
-        // A binary tree of `inner` inner nodes has `inner + 1` leaves: the
-        // stored ones and the marked ones.
-        assert_eq!(nodes.len() + unstored, 2 * inner.len() + 1);
+        // Each part is a binary tree, and one of `inner` inner nodes has
+        // `inner + 1` leaves: the stored ones and the marked ones.
+        let parts = tree.parts().len();
+        assert_eq!(nodes.len() + unstored, 2 * inner.len() + parts);
         let s = tree.stats();
         assert_eq!(s.nodes, nodes.len());
-        assert_eq!(s.leaves, inner.len() + 1);
+        assert_eq!(s.leaves, inner.len() + parts);
         assert_eq!(s.empty_leaves, unstored);
         let refs: usize = nodes
             .iter()
@@ -177,14 +198,75 @@ fn teapot_in_a_stadium_isolates_the_teapot() {
 }
 
 #[test]
+fn a_small_mesh_among_large_walls_is_built_apart_and_the_walls_cut_off() {
+    // The teapot in a stadium: 14 large triangles (walls and floor) around
+    // a small sphere. The sphere gets a tree of its own, the large triangles
+    // another, whose face cuts send each wall to a flat leaf in its face.
+    let mesh = teapot_in_stadium(5_000, 1.0e4);
+    let n = mesh.triangle_count();
+    let tree = KdTree::new(&mesh).unwrap();
+    tree.validate().unwrap();
+    let parts = tree.parts();
+    assert_eq!(parts.len(), 2);
+    assert_eq!(parts[0].root, 0);
+    assert!(parts[0].bounds.max.x <= 1.0 && parts[1].bounds.max.x == 5_000.0);
+    // Walk each part with node boxes: which primitives each holds, and
+    // whether a split lies on its node's face (a face cut).
+    let mut held = vec![Vec::new(); 2];
+    let mut face_cuts = 0;
+    for (k, part) in parts.iter().enumerate() {
+        let mut stack = vec![(part.root, part.bounds)];
+        while let Some((i, b)) = stack.pop() {
+            let node = tree.nodes()[i];
+            match tree.split_position(i) {
+                None => held[k].extend_from_slice(tree.leaf_primitives(&node)),
+                Some(s) => {
+                    let a = node.axis();
+                    face_cuts += usize::from(s == b.min[a] || s == b.max[a]);
+                    let (lo, hi) = b.split_at(a, s);
+                    let [below, above] = node.children(i);
+                    stack.extend(below.map(|c| (c, lo)));
+                    stack.extend(above.map(|c| (c, hi)));
+                }
+            }
+        }
+    }
+    assert!(held[0].iter().all(|&p| (p as usize) < n - 14));
+    assert!(held[1].iter().all(|&p| (p as usize) >= n - 14));
+    assert!(face_cuts >= 6, "{face_cuts} face cuts: every wall cut off");
+    // Rays from the camera over the scene: every answer brute force's, and
+    // a floor ray tests few triangles.
+    let brute = BruteForce::new(&mesh).unwrap();
+    for i in 0..400 {
+        let (u, v) = (f64::from(i % 20) * 0.3 - 3.0, f64::from(i / 20) * 0.3 - 3.0);
+        let ray = Ray::new(Vec3::new(3.0, -4.0, 2.0), Vec3::new(u - 3.0, v + 4.0, -3.0)).unwrap();
+        assert_eq!(
+            tree.intersect(&ray).unwrap().map(|h| h.bit_key()),
+            brute.intersect(&ray).unwrap().map(|h| h.bit_key()),
+            "ray {i}"
+        );
+        assert_eq!(tree.occluded(&ray).unwrap(), brute.occluded(&ray).unwrap());
+    }
+    let floor = Ray::new(Vec3::new(3.0, -4.0, 2.0), Vec3::new(0.0, 1.0, -1.0)).unwrap();
+    let mut c = accel_core::TraversalCounters::default();
+    let hit = tree.intersect_counted(&floor, &mut c).unwrap().unwrap();
+    assert!(hit.prim as usize >= n - 2, "premise: the floor");
+    assert!(c.prims <= 4, "{c:?}");
+}
+
+#[test]
 fn a_small_mesh_in_a_huge_box_is_split_as_finely_as_on_its_own() {
-    // The teapot in a stadium is a sphere in a box 10^4 times wider. The
-    // cuts that isolate it do not count towards the depth limit, so rays
+    // A sphere in a box 10^4 times wider whose walls are tiled (so that it
+    // is one tree, see `tiled_stadium`). The cuts that isolate the sphere
+    // do not count towards the depth limit, so rays
     // at the sphere test about as many triangles as with the sphere alone
     // (before, the limit bound first: 14.1 against 0.9 per camera ray on
     // the 100k-triangle version).
-    let stadium = teapot_in_stadium(20_000, 1.0e4);
+    let stadium = tiled_stadium(20_000, 1.0e4);
     let alone = uv_sphere(Vec3::ZERO, 1.0, 20_000);
+    let sphere = alone.triangle_count();
+    // Triangle tests per ray over the rays that hit the sphere (its
+    // triangles come first in both meshes), and how many do.
     let tests_per_ray = |mesh: &TriangleMesh<f64>| {
         let tree = KdTree::new(mesh).unwrap();
         tree.validate().unwrap();
@@ -197,19 +279,25 @@ fn a_small_mesh_in_a_huge_box_is_split_as_finely_as_on_its_own() {
                 f64::from(i / 20) / 10.0 - 0.95,
             );
             let ray = Ray::new(Vec3::new(u, v, 3.0), Vec3::new(0.0, 0.0, -1.0)).unwrap();
-            hits += usize::from(tree.intersect_counted(&ray, &mut c).unwrap().is_some());
+            let mut ray_counts = accel_core::TraversalCounters::default();
+            let hit = tree.intersect_counted(&ray, &mut ray_counts).unwrap();
+            if hit.is_some_and(|h| (h.prim as usize) < sphere) {
+                hits += 1;
+                c.add(&ray_counts);
+            }
         }
-        (c.prims as f64 / 400.0, hits)
+        (c.prims as f64 / f64::from(hits.max(1)), hits)
     };
     let tree = KdTree::new(&stadium).unwrap();
+    assert_eq!(tree.parts().len(), 1, "premise: one tree");
     assert!(
         tree.stats().extra("depth").unwrap() > f64::from(tree.depth_limit()),
         "premise: isolating cuts went past the limit"
     );
     let (in_stadium, hits_stadium) = tests_per_ray(&stadium);
     let (on_its_own, hits_alone) = tests_per_ray(&alone);
-    // Every ray hits something in the stadium (the floor at least).
-    assert_eq!(hits_stadium, 400);
+    // The same rays hit the sphere in both.
+    assert_eq!(hits_stadium, hits_alone);
     assert!(
         hits_alone > 250,
         "premise: most rays hit the sphere ({hits_alone})"

@@ -18,7 +18,7 @@ use accel_core::{Aabb, Real};
 /// How much narrower than its node a kept child must be, and how many times
 /// as many primitives as the other child it must hold, for the cut not to
 /// count.
-const ISOLATION: u32 = 16;
+pub(crate) const ISOLATION: u32 = 16;
 
 /// A node's place on its path: the levels that count towards the depth
 /// limit, and all levels.

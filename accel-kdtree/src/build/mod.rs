@@ -4,6 +4,7 @@
 pub(crate) mod binned;
 pub(crate) mod depth;
 pub(crate) mod events;
+pub(crate) mod parts;
 pub(crate) mod sah;
 pub(crate) mod spares;
 pub(crate) mod split;
@@ -272,11 +273,25 @@ fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError>
     Ok(())
 }
 
+/// One independently built part of a tree: the root of its nodes, the box
+/// it covers (its primitives' bounds) and its depth limit. Most trees have
+/// one; a small dense part in a large sparse scene makes two
+/// ([`parts`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KdPart<T> {
+    /// Index of the part's root in [`crate::KdTree::nodes`].
+    pub root: usize,
+    /// The part's box: the bounds of its primitives.
+    pub bounds: Aabb<T>,
+    /// The part's depth limit (from its own primitive count).
+    pub depth_limit: u32,
+}
+
 /// What a build produces before it is wrapped with its primitives.
 pub(crate) struct Built<T> {
     pub(crate) out: Out<T>,
+    pub(crate) parts: Vec<KdPart<T>>,
     pub(crate) bounds: Aabb<T>,
-    pub(crate) depth_limit: u32,
     pub(crate) build_time: std::time::Duration,
 }
 
@@ -293,7 +308,8 @@ fn check_count(n: usize) -> Result<(), BuildError> {
 }
 
 /// Builds the tree over `prims` with the event sweep, or with the naive
-/// O(n²) reference builder when `naive` is set.
+/// O(n²) reference builder when `naive` is set: one tree per part
+/// ([`parts::partition`]), appended one after the other.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
     params: &KdTreeParams,
@@ -302,57 +318,89 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let start = Instant::now();
     params.validate()?;
     let (boxes, bounds) = primitive_bounds(prims)?;
-    let n = prims.len();
-    check_count(n)?;
-    let depth_limit = params.depth_limit(n);
-    let ctx = Ctx {
-        prims,
-        params,
-        depth_limit,
-        refs: AtomicU64::new(0),
-        failed: AtomicBool::new(false),
-        _t: core::marker::PhantomData,
-    };
+    check_count(prims.len())?;
+    let groups = parts::partition(&boxes, &bounds);
+    let whole = groups.len() == 1;
     let mut out = Out::new();
-    if naive {
-        crate::naive::build_naive(&ctx, &boxes, bounds, &mut out);
-    } else if n > params.binned_above {
-        let root = BinnedNode {
-            bounds,
-            prims: (0..n as u32).collect(),
-            boxes,
-            depth: Depth::ROOT,
+    let mut parts = Vec::with_capacity(groups.len());
+    let mut references = 0u64;
+    for list in groups {
+        let part_boxes: Vec<Aabb<T>> = list.iter().map(|&g| boxes[g as usize]).collect();
+        let part_bounds = if whole {
+            bounds
+        } else {
+            part_boxes.iter().fold(Aabb::empty(), |u, b| u.union(b))
         };
-        flatten(build_binned(&ctx, root), &mut out)?;
-    } else {
-        let events = root_events(&boxes);
-        let root = NodeWork {
-            bounds,
-            prims: (0..n as u32).collect(),
-            events,
-            depth: Depth::ROOT,
+        let depth_limit = params.depth_limit(list.len());
+        let ctx = Ctx {
+            prims,
+            params,
+            depth_limit,
+            refs: AtomicU64::new(references),
+            failed: AtomicBool::new(false),
+            _t: core::marker::PhantomData,
         };
-        drop(boxes);
-        let piece = build_piece(&ctx, root);
-        flatten(piece, &mut out)?;
-    }
-    if ctx.failed.load(Ordering::Relaxed) {
-        return Err(BuildError::BudgetExceeded {
-            what: "kd-tree references",
-            needed: ctx.refs.load(Ordering::Relaxed),
-            budget: params.max_references.min(u64::from(u32::MAX)),
+        let part = build_part(&ctx, list, part_boxes, part_bounds, naive)?;
+        references = ctx.refs.load(Ordering::Relaxed);
+        if ctx.failed.load(Ordering::Relaxed) {
+            return Err(BuildError::BudgetExceeded {
+                what: "kd-tree references",
+                needed: references,
+                budget: params.max_references.min(u64::from(u32::MAX)),
+            });
+        }
+        let root = out.nodes.len();
+        flatten(Piece::Flat(part), &mut out)?;
+        parts.push(KdPart {
+            root,
+            bounds: part_bounds,
+            depth_limit,
         });
     }
-    unstored::drop_empty_leaves(&mut out);
     out.nodes.shrink_to_fit();
     out.refs.shrink_to_fit();
     out.splits.shrink_to_fit();
     Ok(Built {
         out,
+        parts,
         bounds,
-        depth_limit,
         build_time: start.elapsed(),
     })
+}
+
+/// The tree of one part: `list` (ascending) with bounds `boxes` (in the same
+/// order) inside `bounds`, empty leaves dropped.
+fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    ctx: &Ctx<'_, T, P>,
+    list: Vec<u32>,
+    boxes: Vec<Aabb<T>>,
+    bounds: Aabb<T>,
+    naive: bool,
+) -> Result<Out<T>, BuildError> {
+    let mut out = Out::new();
+    if naive {
+        crate::naive::build_naive(ctx, &list, &boxes, bounds, &mut out);
+    } else if list.len() > ctx.params.binned_above {
+        let root = BinnedNode {
+            bounds,
+            prims: list,
+            boxes,
+            depth: Depth::ROOT,
+        };
+        flatten(build_binned(ctx, root), &mut out)?;
+    } else {
+        let events = root_events(&boxes);
+        drop(boxes);
+        let root = NodeWork {
+            bounds,
+            prims: list,
+            events,
+            depth: Depth::ROOT,
+        };
+        flatten(build_piece(ctx, root), &mut out)?;
+    }
+    unstored::drop_empty_leaves(&mut out);
+    Ok(out)
 }
 
 /// The root's events: each primitive's bounds (its part in the root box),
@@ -370,12 +418,13 @@ fn root_events<T: Real>(boxes: &[Aabb<T>]) -> Events<T> {
     [x, y, z]
 }
 
-/// Shape statistics of a finished tree, by one walk with node boxes.
+/// Shape statistics of a finished tree, by one walk of each part with node
+/// boxes; the SAH cost prices every part against the scene's box `bounds`.
 pub(crate) fn tree_stats<T: Real>(
     out: &Out<T>,
+    parts: &[KdPart<T>],
     bounds: &Aabb<T>,
     params: &KdTreeParams,
-    depth_limit: u32,
     primitives: usize,
 ) -> AccelStats {
     let mut stats = AccelStats {
@@ -397,7 +446,8 @@ pub(crate) fn tree_stats<T: Real>(
     };
     let (mut max_depth, mut depth_sum, mut sah_cost) = (0u32, 0u64, 0.0f64);
     // `None` stands for an unstored empty leaf.
-    let mut stack = vec![(Some(0usize), *bounds, 0u32)];
+    let mut stack: Vec<(Option<usize>, Aabb<T>, u32)> =
+        parts.iter().map(|p| (Some(p.root), p.bounds, 0)).collect();
     while let Some((i, b, depth)) = stack.pop() {
         let node = i.map_or(KdNode::leaf(0, 0), |i| out.nodes[i]);
         if node.is_leaf() {
@@ -425,7 +475,11 @@ pub(crate) fn tree_stats<T: Real>(
             "mean_leaf_depth",
             depth_sum as f64 / stats.leaves.max(1) as f64,
         ),
-        ("depth_limit", f64::from(depth_limit)),
+        (
+            "depth_limit",
+            f64::from(parts.first().map_or(0, |p| p.depth_limit)),
+        ),
+        ("parts", parts.len() as f64),
         ("sah_cost", sah_cost),
         ("intersect_cost", params.intersect_cost),
         ("traversal_cost", params.traversal_cost),

@@ -8,9 +8,13 @@
 //! primitives go to whichever side is cheaper (ties go left): the explicit
 //! handling of primitives lying in the split plane.
 //!
-//! Only planes strictly inside the node are candidates (as pbrt): a plane on
-//! the node's face would cut off a flat empty child, which the empty bonus
-//! would reward forever.
+//! Planes strictly inside the node are candidates (as pbrt). A plane on one
+//! of the node's faces is one only where primitives lie flat in that face
+//! and others do not: those go to a flat child in the face, the rest to the
+//! other child (a *face cut*). A wall lying in a node's face is thus cut
+//! away from the space in front of it, where every ray crossing the node
+//! would otherwise test it. An empty flat child is never made: the empty
+//! bonus would reward cutting it off forever.
 
 use super::events::{Event, Events};
 use crate::KdTreeParams;
@@ -112,6 +116,32 @@ impl Sah {
     }
 }
 
+impl Sah {
+    /// The cost of a face cut at `pos`, a face of the node on axis `k`, where
+    /// `planar` of its `n` primitives lie flat, and whether they go left (to
+    /// the flat child at the lower face); `None` where the plane is not a
+    /// face, the node is flat on `k`, or the cut would leave a child empty.
+    #[inline]
+    pub(crate) fn face_cut(
+        &self,
+        k: usize,
+        pos: f64,
+        planar: usize,
+        n: usize,
+    ) -> Option<(f64, bool)> {
+        if planar == 0 || planar >= n || !(self.min[k] < self.max[k]) {
+            return None;
+        }
+        if pos == self.min[k] {
+            Some((self.cost(k, pos, planar, n - planar), true))
+        } else if pos == self.max[k] {
+            Some((self.cost(k, pos, n - planar, planar), false))
+        } else {
+            None
+        }
+    }
+}
+
 /// Keeps the first of the cheapest splits, in the order axis, then position:
 /// `candidate` replaces `best` only when strictly cheaper.
 #[inline]
@@ -170,6 +200,10 @@ pub(crate) fn sweep_axis<T: Real>(
             if cost < best_cost {
                 (best_cost, best_at, best_left) = (cost, at, planar_left);
             }
+        } else if let Some((cost, planar_left)) = sah.face_cut(k, p, planar, n)
+            && cost < best_cost
+        {
+            (best_cost, best_at, best_left) = (cost, at, planar_left);
         }
         nl += starts + planar;
     }
