@@ -17,7 +17,7 @@
 //! part by part, each with the beam of its own bounds, the later ones with
 //! the best hit of the earlier.
 
-use crate::build::decode_split;
+use crate::build::{KdPart, decode_split};
 use crate::reach::node_beam;
 use crate::tree::KdTree;
 use accel_core::{
@@ -286,49 +286,73 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     }
 
     /// The nearest hit: each part walked in turn, with the best hit so far
-    /// (each with the beam of its own bounds).
+    /// (each with the beam of its own bounds). A tree of one part, nearly
+    /// every tree, takes a path of its own, without the loop.
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
     ) -> Result<Option<Hit<T>>, QueryError> {
         ray.validate()?;
+        if self.parts.len() == 1 {
+            return Ok(self.nearest_in(&self.first, ray, None, counter));
+        }
         let mut best = None;
         for part in &self.parts {
-            let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
-                continue;
-            };
-            let mut v = Nearest {
-                prims: self.prims,
-                tr: &tr,
-                mailbox: Mailbox::new(),
-                best,
-            };
-            self.walk(part.root, &tr, &mut v, counter);
-            best = v.best;
+            best = self.nearest_in(part, ray, best, counter);
         }
         Ok(best)
     }
 
-    /// Any hit, part by part.
+    /// The nearest of `best` and the hits in `part`.
+    #[inline]
+    fn nearest_in<C: CostCounter>(
+        &self,
+        part: &KdPart<T>,
+        ray: &Ray<T>,
+        best: Option<Hit<T>>,
+        counter: &mut C,
+    ) -> Option<Hit<T>> {
+        let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+            return best;
+        };
+        let mut v = Nearest {
+            prims: self.prims,
+            tr: &tr,
+            mailbox: Mailbox::new(),
+            best,
+        };
+        self.walk(part.root, &tr, &mut v, counter);
+        v.best
+    }
+
+    /// Any hit, part by part (a one-part tree without the loop, as
+    /// [`KdTree::nearest`]).
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
         ray.validate()?;
-        for part in &self.parts {
-            let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
-                continue;
-            };
-            let mut v = AnyHit {
-                prims: self.prims,
-                tr: &tr,
-                mailbox: Mailbox::new(),
-                found: false,
-            };
-            self.walk(part.root, &tr, &mut v, counter);
-            if v.found {
-                return Ok(true);
-            }
+        if self.parts.len() == 1 {
+            return Ok(self.any_in(&self.first, ray, counter));
         }
-        Ok(false)
+        Ok(self
+            .parts
+            .iter()
+            .any(|part| self.any_in(part, ray, counter)))
+    }
+
+    /// Whether anything in `part` is hit.
+    #[inline]
+    fn any_in<C: CostCounter>(&self, part: &KdPart<T>, ray: &Ray<T>, counter: &mut C) -> bool {
+        let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+            return false;
+        };
+        let mut v = AnyHit {
+            prims: self.prims,
+            tr: &tr,
+            mailbox: Mailbox::new(),
+            found: false,
+        };
+        self.walk(part.root, &tr, &mut v, counter);
+        v.found
     }
 }
 

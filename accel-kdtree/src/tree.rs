@@ -23,6 +23,9 @@ pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     /// The scene's bounds (every part's box lies inside).
     pub(crate) bounds: Aabb<T>,
     pub(crate) parts: Vec<KdPart<T>>,
+    /// `parts[0]`, kept inline: the part a query of a one-part tree walks
+    /// (nearly every tree), without a load through the vector.
+    pub(crate) first: KdPart<T>,
     pub(crate) stats: AccelStats,
 }
 
@@ -73,6 +76,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             splits,
             reach: Vec::new(),
             bounds: built.bounds,
+            first: built.parts[0],
             parts: built.parts,
             stats,
         };
