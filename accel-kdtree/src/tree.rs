@@ -137,7 +137,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
     /// [`KdTree::parts`]).
     #[must_use]
     pub fn depth_limit(&self) -> u32 {
-        self.parts.first().map_or(0, |p| p.depth_limit)
+        self.first.depth_limit
     }
 
     /// The tree's parts, each a tree of its own in [`KdTree::nodes`]: one,

@@ -317,19 +317,23 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> Result<Built<T>, BuildError> {
     let start = Instant::now();
     params.validate()?;
-    let (boxes, bounds) = primitive_bounds(prims)?;
+    let (mut boxes, bounds) = primitive_bounds(prims)?;
     check_count(prims.len())?;
     let groups = parts::partition(&boxes, &bounds);
     let whole = groups.len() == 1;
     let mut out = Out::new();
     let mut parts = Vec::with_capacity(groups.len());
     let mut references = 0u64;
-    for list in groups {
-        let part_boxes: Vec<Aabb<T>> = list.iter().map(|&g| boxes[g as usize]).collect();
-        let part_bounds = if whole {
-            bounds
+    for parts::Group {
+        prims: list,
+        bounds: part_bounds,
+    } in groups
+    {
+        // A whole scene's part takes the boxes as they are (no copy).
+        let part_boxes: Vec<Aabb<T>> = if whole {
+            core::mem::take(&mut boxes)
         } else {
-            part_boxes.iter().fold(Aabb::empty(), |u, b| u.union(b))
+            list.iter().map(|&g| boxes[g as usize]).collect()
         };
         let depth_limit = params.depth_limit(list.len());
         let ctx = Ctx {

@@ -24,29 +24,46 @@
 use super::depth::ISOLATION;
 use accel_core::{Aabb, Real};
 
-/// The primitives of each part, ascending: the small ones, then the large
-/// ones, when the scene splits; all of them otherwise.
-pub(crate) fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Vec<u32>> {
-    let all = || vec![(0..boxes.len() as u32).collect::<Vec<u32>>()];
+/// The primitives of one part (ascending) and the bounds of their boxes.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Group<T> {
+    pub(crate) prims: Vec<u32>,
+    pub(crate) bounds: Aabb<T>,
+}
+
+/// The parts of a scene whose primitives have the boxes `boxes` and the
+/// bounds `bounds`: the small primitives, then the large ones, when the
+/// scene splits; all of them otherwise.
+pub(crate) fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Group<T>> {
+    let all = || {
+        vec![Group {
+            prims: (0..boxes.len() as u32).collect(),
+            bounds: *bounds,
+        }]
+    };
     if boxes.is_empty() || bounds.is_empty() {
         return all();
     }
     let factor = T::from_f64(f64::from(ISOLATION));
     let extent = bounds.max - bounds.min;
     let largest = extent.max_component();
-    let (mut small, mut large) = (Vec::new(), Vec::new());
-    let mut small_bounds = Aabb::empty();
+    let empty = || Group {
+        prims: Vec::new(),
+        bounds: Aabb::empty(),
+    };
+    let (mut small, mut large) = (empty(), empty());
     for (i, b) in boxes.iter().enumerate() {
-        if (b.max - b.min).max_component() * factor >= largest {
-            large.push(i as u32);
+        let group = if (b.max - b.min).max_component() * factor >= largest {
+            &mut large
         } else {
-            small.push(i as u32);
-            small_bounds = small_bounds.union(b);
-        }
+            &mut small
+        };
+        group.prims.push(i as u32);
+        group.bounds.merge(b);
     }
-    let narrow = (0..3).all(|a| (small_bounds.max[a] - small_bounds.min[a]) * factor <= extent[a]);
-    let many = small.len() >= large.len().saturating_mul(ISOLATION as usize);
-    if large.is_empty() || small.is_empty() || !narrow || !many {
+    let narrow = (0..3).all(|a| (small.bounds.max[a] - small.bounds.min[a]) * factor <= extent[a]);
+    let many = small.prims.len() >= large.prims.len().saturating_mul(ISOLATION as usize);
+    if large.prims.is_empty() || small.prims.is_empty() || !narrow || !many {
         return all();
     }
     vec![small, large]
@@ -61,48 +78,51 @@ mod tests {
         Aabb::new(Vec3::splat(c - h), Vec3::splat(c + h))
     }
 
+    /// A wall of the ±100 box, flat at `x`.
+    fn wall(x: f64) -> Aabb<f64> {
+        Aabb::new(Vec3::new(x, -100.0, -100.0), Vec3::new(x, 100.0, 100.0))
+    }
+
+    /// The prims of each part of the boxes' scene.
+    fn parts_of(boxes: &[Aabb<f64>]) -> Vec<Vec<u32>> {
+        let bounds = boxes.iter().fold(Aabb::empty(), |u, b| u.union(b));
+        partition(boxes, &bounds)
+            .into_iter()
+            .map(|g| g.prims)
+            .collect()
+    }
+
     #[test]
     fn a_small_cluster_in_a_large_box_is_built_apart() {
         // 32 small boxes near the origin, two walls of the ±100 box.
         let mut boxes: Vec<Aabb<f64>> = (0..32).map(|i| cube(f64::from(i) * 0.01, 0.1)).collect();
-        boxes.push(Aabb::new(
-            Vec3::new(-100.0, -100.0, -100.0),
-            Vec3::new(-100.0, 100.0, 100.0),
-        ));
-        boxes.push(Aabb::new(
-            Vec3::new(100.0, -100.0, -100.0),
-            Vec3::new(100.0, 100.0, 100.0),
-        ));
+        boxes.extend([wall(-100.0), wall(100.0)]);
         let bounds = boxes.iter().fold(Aabb::empty(), |u, b| u.union(b));
         let parts = partition(&boxes, &bounds);
-        assert_eq!(parts, vec![(0..32).collect::<Vec<u32>>(), vec![32, 33]]);
+        assert_eq!(
+            parts.iter().map(|g| g.prims.clone()).collect::<Vec<_>>(),
+            vec![(0..32).collect::<Vec<u32>>(), vec![32, 33]]
+        );
+        // Each part's bounds are its own boxes'.
+        assert_eq!(
+            parts[0].bounds,
+            boxes[..32].iter().fold(Aabb::empty(), |u, b| u.union(b))
+        );
+        assert_eq!(parts[1].bounds, bounds);
     }
 
     #[test]
     fn scenes_without_a_small_dense_part_stay_whole() {
         // The cluster fills a quarter of the box: not narrow enough.
         let mut boxes: Vec<Aabb<f64>> = (0..32).map(|i| cube(f64::from(i), 0.5)).collect();
-        boxes.push(Aabb::new(
-            Vec3::new(-100.0, -100.0, -100.0),
-            Vec3::new(-100.0, 100.0, 100.0),
-        ));
-        let bounds = boxes.iter().fold(Aabb::empty(), |u, b| u.union(b));
-        assert_eq!(partition(&boxes, &bounds).len(), 1);
+        boxes.push(wall(-100.0));
+        assert_eq!(parts_of(&boxes).len(), 1);
         // Too few small ones for the large: 16 small boxes beside 2 walls.
         let mut boxes: Vec<Aabb<f64>> = (0..16).map(|i| cube(f64::from(i) * 0.01, 0.1)).collect();
-        boxes.push(Aabb::new(
-            Vec3::new(-100.0, -100.0, -100.0),
-            Vec3::new(-100.0, 100.0, 100.0),
-        ));
-        boxes.push(Aabb::new(
-            Vec3::new(100.0, -100.0, -100.0),
-            Vec3::new(100.0, 100.0, 100.0),
-        ));
-        let bounds = boxes.iter().fold(Aabb::empty(), |u, b| u.union(b));
-        assert_eq!(partition(&boxes, &bounds).len(), 1);
+        boxes.extend([wall(-100.0), wall(100.0)]);
+        assert_eq!(parts_of(&boxes).len(), 1);
         // No large primitive at all.
         let boxes: Vec<Aabb<f64>> = (0..64).map(|i| cube(f64::from(i), 0.4)).collect();
-        let bounds = boxes.iter().fold(Aabb::empty(), |u, b| u.union(b));
-        assert_eq!(partition(&boxes, &bounds).len(), 1);
+        assert_eq!(parts_of(&boxes).len(), 1);
     }
 }
