@@ -16,7 +16,10 @@
 //!   other accelerator must match bit for bit (smallest `t`, ties to the lowest
 //!   index, same `u`, `v`);
 //! - [`TraversalRay`]: the per-ray tolerances that make traversal conservative
-//!   (after pbrt's `gamma(n)` error bounds and Ize, "Robust BVH ray traversal", 2013).
+//!   (after pbrt's `gamma(n)` error bounds and Ize, "Robust BVH ray traversal", 2013);
+//! - [`parts`]: the rule that builds a small dense part of a large sparse
+//!   scene (a teapot in a stadium) apart from the large primitives around it,
+//!   shared by the kD-tree and the octree.
 //!
 //! The speed-against-accuracy dials live here too: [`moller_trumbore`] (a
 //! faster, non-watertight triangle test, as a [`PrimitiveSet`] wrapper) and
@@ -49,6 +52,7 @@ mod hit;
 mod mailbox;
 mod mesh;
 pub mod moller_trumbore;
+pub mod parts;
 mod primitive;
 mod ray;
 mod real;

@@ -271,6 +271,23 @@ pub fn teapot_in_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
     m
 }
 
+/// A sphere of about `dense` triangles of radius 1 at the origin, inside a
+/// box of side `stadium` whose faces are tiled `tiles × tiles`: with fine
+/// tiles (20 for a box 10⁴ wide) no triangle is large enough for the scene
+/// to be built in parts ([`crate::parts`]), so one structure must isolate
+/// the sphere.
+#[must_use]
+pub fn sphere_in_tiled_box(dense: usize, stadium: f64, tiles: u32) -> TriangleMesh<f64> {
+    let mut m = uv_sphere(Vec3::ZERO, 1.0, dense);
+    let h = stadium / 2.0;
+    m.append(&box_mesh(
+        &Aabb::new(Vec3::splat(-h), Vec3::splat(h)),
+        tiles,
+    ))
+    .expect("small mesh");
+    m
+}
+
 /// The generated benchmark scenes, by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum GeneratedScene {

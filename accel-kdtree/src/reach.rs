@@ -172,7 +172,7 @@ mod tests {
         // side 10^4, where the query beam is about 0.02 wide, and of side 10,
         // where it is about 2e-5. The walls are tiled 20 × 20 per face, so
         // no triangle is large enough for the scene to be built in parts
-        // (`crate::build::parts`), where each part's beam is its own, and
+        // (`accel_core::parts`), where each part's beam is its own, and
         // the median triangle is still one of the sphere's.
         for (stadium, narrows) in [(1e4, true), (10.0, false)] {
             let mut mesh = uv_sphere(Vec3::ZERO, 1.0, 8000);

@@ -1,7 +1,7 @@
 //! The tree's shape: real splits, the naive build on a scene large enough to
 //! be built in parallel, named edge cases, and typed errors.
 
-use accel_core::scenes::{box_mesh, random_soup, teapot_in_stadium, uv_sphere};
+use accel_core::scenes::{random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
 use accel_core::{Aabb, Accelerator, BruteForce, BuildError, Ray, Sphere, TriangleMesh, Vec3};
 use accel_kdtree::{KdTree, KdTreeParams};
 
@@ -24,11 +24,7 @@ fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized
 /// tiled 20 × 20: no triangle is large enough for the scene to be built in
 /// parts, so one tree must isolate the sphere.
 fn tiled_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
-    let mut mesh = uv_sphere(Vec3::ZERO, 1.0, dense);
-    let h = stadium / 2.0;
-    mesh.append(&box_mesh(&Aabb::new(Vec3::splat(-h), Vec3::splat(h)), 20))
-        .unwrap();
-    mesh
+    sphere_in_tiled_box(dense, stadium, 20)
 }
 
 #[test]

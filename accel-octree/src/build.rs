@@ -12,6 +12,7 @@
 
 use crate::node::{CHILD, MAX_PRIMITIVES, Node};
 use crate::params::{OctreeParams, ResolutionRule};
+use accel_core::parts::{Group, partition};
 use accel_core::{Aabb, BuildError, PrimitiveSet, Real, Vec3, primitive_bounds};
 use accel_grid::build::PrimitiveCells;
 use accel_grid::cells::GridGeometry;
@@ -40,6 +41,8 @@ const SPREAD: f64 = 0.125;
 /// The built structure, before it is wrapped with its primitives.
 pub(crate) struct Built<T> {
     pub(crate) nodes: Vec<Node<T>>,
+    /// How many parts: the first `parts` nodes are their root grids.
+    pub(crate) parts: usize,
     pub(crate) cells: CellLists,
     /// True when subdivision stopped at the memory budget.
     pub(crate) capped: bool,
@@ -92,20 +95,38 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         });
     }
     let budget = params.max_bytes;
-    let root_box = if n == 0 {
-        Aabb::from_point(Vec3::ZERO)
+    // A small dense part of a large sparse scene gets a root grid of its
+    // own, apart from the large primitives around it.
+    let groups = if n == 0 {
+        vec![Group {
+            prims: Vec::new(),
+            bounds: Aabb::from_point(Vec3::ZERO),
+        }]
     } else {
-        scene
+        partition(&boxes, &scene)
     };
-    let (geometry, lists) = root(prims, &boxes, root_box, &params.root, budget)?;
-    let mut used = grid_bytes::<T>(geometry.resolution());
-    used += lists.reference_count() as u64 * 4;
-    let mut drafts = vec![Draft {
-        geometry,
-        lists,
-        level: 0,
-        links: Vec::new(),
-    }];
+    let whole = groups.len() == 1;
+    let parts = groups.len();
+    let mut used = 0u64;
+    let mut drafts = Vec::with_capacity(parts);
+    for group in &groups {
+        let items = (!whole).then_some(group.prims.as_slice());
+        let (geometry, lists) = root(
+            prims,
+            &boxes,
+            items,
+            group.bounds,
+            &params.root,
+            budget.saturating_sub(used),
+        )?;
+        used += grid_bytes::<T>(geometry.resolution()) + lists.reference_count() as u64 * 4;
+        drafts.push(Draft {
+            geometry,
+            lists,
+            level: 0,
+            links: Vec::new(),
+        });
+    }
 
     let mut capped = false;
     let mut level_start = 0;
@@ -189,10 +210,11 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             break;
         }
     }
-    assemble(drafts, &boxes, capped)
+    assemble(drafts, parts, &boxes, capped)
 }
 
-/// The root grid by `rule`, within `budget` bytes.
+/// The root grid by `rule` over `bounds`, within `budget` bytes, holding
+/// `items` (every primitive when `None`).
 ///
 /// A [`ResolutionRule::Nested`] root whose cells are mostly occupied
 /// ([`FILLED`]: holding a primitive that does not span them, see [`spans`]) is
@@ -203,6 +225,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
 fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
     boxes: &[Aabb<T>],
+    items: Option<&[u32]>,
     bounds: Aabb<T>,
     rule: &ResolutionRule,
     budget: u64,
@@ -216,8 +239,9 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
         e => e,
     };
     let grid = |rule: &ResolutionRule| -> Result<(GridGeometry<T>, CellLists), BuildError> {
+        let count = items.map_or(prims.len(), <[u32]>::len);
         let resolution = rule
-            .resolution(&bounds, prims.len(), budget / 4)
+            .resolution(&bounds, count, budget / 4)
             .map_err(over_budget)?;
         let bytes = grid_bytes::<T>(resolution);
         if bytes > budget {
@@ -234,12 +258,18 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds: Some(boxes),
             region: None,
         };
-        let lists = CellLists::build(
-            geometry.cell_count(),
-            prims.len() as u32,
-            (budget - bytes) / 4,
-            &visitor,
-        )?;
+        let max_references = (budget - bytes) / 4;
+        let lists = match items {
+            Some(items) => {
+                CellLists::build_items(geometry.cell_count(), items, max_references, &visitor)?
+            }
+            None => CellLists::build(
+                geometry.cell_count(),
+                prims.len() as u32,
+                max_references,
+                &visitor,
+            )?,
+        };
         Ok((geometry, lists))
     };
     let (geometry, lists) = grid(rule)?;
@@ -470,6 +500,7 @@ fn extents<T: Real>(b: &Aabb<T>) -> [f64; 3] {
 /// Joins the drafts' cells into one array, links in place of split cells.
 fn assemble<T: Real>(
     drafts: Vec<Draft<T>>,
+    parts: usize,
     boxes: &[Aabb<T>],
     capped: bool,
 ) -> Result<Built<T>, BuildError> {
@@ -503,7 +534,7 @@ fn assemble<T: Real>(
         })
         .collect();
     let mut base = 0u32;
-    let nodes = drafts
+    let mut nodes: Vec<Node<T>> = drafts
         .into_iter()
         .zip(reach)
         .map(|(d, reach)| {
@@ -517,8 +548,12 @@ fn assemble<T: Real>(
             node
         })
         .collect();
+    // The collect may reuse the drafts' allocation, sized for the larger
+    // drafts and grown by doubling: release what the budget did not count.
+    nodes.shrink_to_fit();
     Ok(Built {
         nodes,
+        parts,
         cells,
         capped,
     })

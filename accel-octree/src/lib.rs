@@ -24,6 +24,12 @@
 //!   work and it separates the primitives, within a depth limit and a memory
 //!   budget. Children of one level are built in parallel and accepted in cell
 //!   order, so the result does not depend on the thread count.
+//! - **Parts.** A small dense part of a large sparse scene (a teapot in a
+//!   stadium whose walls and floor are a few huge triangles) gets a root grid
+//!   of its own over its bounds, and the large primitives another over the
+//!   scene ([`accel_core::parts`], the rule the kD-tree uses): the small
+//!   part is refined as if it stood alone, not cut by the root cells of the
+//!   whole scene, and rays that pass it by never enter its grids.
 //! - **Reuse.** Every grid is an `accel-grid` [`GridGeometry`](accel_grid::cells::GridGeometry)
 //!   (point-to-cell, cell bounds), filled by its two-pass CSR build
 //!   ([`CellLists`](accel_grid::csr::CellLists), [`PrimitiveCells`](accel_grid::build::PrimitiveCells))
@@ -36,7 +42,9 @@
 //!   plus the hit tolerance), with one per-query mailbox across levels. A
 //!   child's beam is as thin as the rounding of what it holds allows, so a
 //!   small cluster in a huge scene is walked as finely as if it stood alone.
-//!   Every query is bit-for-bit the answer of [`BruteForce`](accel_core::BruteForce).
+//!   A scene in parts is walked part by part, the later ones with the best
+//!   hit of the earlier. Every query is bit-for-bit the answer of
+//!   [`BruteForce`](accel_core::BruteForce).
 //!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};

@@ -4,7 +4,7 @@ use crate::build::build;
 use crate::node::{LevelStats, Node};
 use crate::params::OctreeParams;
 use crate::stats::{accel_stats, level_stats};
-use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
+use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
 use accel_grid::cells::GridGeometry;
 use accel_grid::csr::CellLists;
 use std::time::Instant;
@@ -15,8 +15,14 @@ use std::time::Instant;
 #[derive(Debug)]
 pub struct Octree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     pub(crate) prims: &'a P,
-    /// The grids, root first, each after its parent.
+    /// The grids: the root of each part first, then every other grid after
+    /// its parent.
     pub(crate) nodes: Vec<Node<T>>,
+    /// How many parts ([`accel_core::parts`]): the first `parts` grids are
+    /// their roots.
+    pub(crate) parts: usize,
+    /// The bounds of everything indexed: the union of the roots' boxes.
+    pub(crate) bounds: Aabb<T>,
     /// Every grid's cells: primitive lists and child links.
     pub(crate) cells: CellLists,
     pub(crate) levels: Vec<LevelStats>,
@@ -65,11 +71,17 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
             start.elapsed(),
             bytes,
             &levels,
+            built.parts,
             built.nodes[0].geometry.resolution(),
             built.capped,
         );
+        let bounds = built.nodes[..built.parts]
+            .iter()
+            .fold(Aabb::empty(), |b, n| b.union(n.geometry.bounds()));
         let octree = Self {
             prims,
+            parts: built.parts,
+            bounds,
             empty: built.cells.reference_count() == 0,
             nodes: built.nodes,
             cells: built.cells,
@@ -84,10 +96,20 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
         Ok(octree)
     }
 
-    /// The geometry of the root grid.
+    /// The geometry of the root grid (of the first part, when the scene is
+    /// built in parts: see [`Octree::part_roots`]).
     #[must_use]
     pub fn root_geometry(&self) -> &GridGeometry<T> {
         &self.nodes[0].geometry
+    }
+
+    /// The geometry of each part's root grid. A small dense part of a large
+    /// sparse scene (a teapot in a stadium) is built apart from the large
+    /// primitives around it ([`accel_core::parts`]): the small part's root
+    /// comes first, then the large part's over the whole scene. Nearly every
+    /// scene is one part.
+    pub fn part_roots(&self) -> impl ExactSizeIterator<Item = &GridGeometry<T>> + '_ {
+        self.nodes[..self.parts].iter().map(|n| &n.geometry)
     }
 
     /// The number of grids (the root and every child).

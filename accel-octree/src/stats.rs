@@ -48,6 +48,7 @@ pub(crate) fn accel_stats(
     build_time: Duration,
     bytes: usize,
     levels: &[LevelStats],
+    parts: usize,
     root_resolution: [u32; 3],
     capped: bool,
 ) -> AccelStats {
@@ -55,6 +56,7 @@ pub(crate) fn accel_stats(
     let mut extra = vec![
         ("grids", sum(|l| l.grids) as f64),
         ("depth", levels.len().saturating_sub(1) as f64),
+        ("parts", parts as f64),
         ("root_nx", f64::from(root_resolution[0])),
         ("root_ny", f64::from(root_resolution[1])),
         ("root_nz", f64::from(root_resolution[2])),

@@ -11,7 +11,9 @@
 //! whichever level they are on. A child's beam is narrowed to the rounding of
 //! what the child holds ([`narrowed`]): a dense cluster is walked as finely
 //! as if it stood alone. One [`Mailbox`] per query, on its stack, spans all
-//! levels.
+//! levels. A scene built in parts ([`accel_core::parts`]) is walked part by
+//! part, each from its own root on the beam of its root's box, the later
+//! parts with the best hit of the earlier.
 
 use crate::node::{Entry, Node, entry};
 use crate::octree::Octree;
@@ -53,8 +55,8 @@ fn narrowed<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, inv_max_d: T) -> Trav
 /// `(1 + gamma(2)) / max|d_i|`: turns a beam half-width into the hit
 /// tolerance, as [`TraversalRay::new`] does.
 #[inline]
-fn tolerance_scale<T: Real>(tr: &TraversalRay<T>) -> T {
-    (T::ONE + T::gamma(2)) / tr.ray().direction.abs().max_component()
+fn tolerance_scale<T: Real>(ray: &Ray<T>) -> T {
+    (T::ONE + T::gamma(2)) / ray.direction.abs().max_component()
 }
 
 /// Where the walk of a child grid starts: the beam's entry into its box, no
@@ -71,17 +73,44 @@ fn child_start<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, limit: T) -> Optio
     (from <= t1 && from <= limit).then_some(from)
 }
 
-/// The state of one nearest-hit query.
-struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
+/// What every query of one ray keeps: the tree, the prepared ray, the hit
+/// tolerance's scale, the mailbox and the work counter.
+struct Query<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
     tree: &'q Octree<'a, T, P>,
     prepared: PreparedRay<T>,
     inv_max_d: T,
     mailbox: Mailbox,
-    best: Option<Hit<T>>,
     counter: &'q mut C,
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P, C> {
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> Query<'q, 'a, T, P, C> {
+    /// A query of `tree` for the prepared ray.
+    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+        Self {
+            tree,
+            inv_max_d: tolerance_scale(&prepared.ray),
+            prepared,
+            mailbox: Mailbox::new(),
+            counter,
+        }
+    }
+}
+
+/// The state of one nearest-hit query.
+struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
+    q: Query<'q, 'a, T, P, C>,
+    best: Option<Hit<T>>,
+}
+
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, 'a, T, P, C> {
+    /// A query of `tree` for the prepared ray, with no hit yet.
+    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+        Self {
+            q: Query::new(tree, prepared, counter),
+            best: None,
+        }
+    }
+
     /// The last parameter a walk on beam `tr` may still reach: the end of
     /// the beam, or the best hit plus the hit tolerance (a hit found in one
     /// cell may lie beyond it: the seed's termination trap).
@@ -112,22 +141,22 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P,
     /// then walks its child grid if it has one.
     #[inline]
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) {
-        self.counter.node();
-        let tree = self.tree;
+        self.q.counter.node();
+        let tree = self.q.tree;
         let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
         for &p in prims {
-            if self.mailbox.seen(p) {
+            if self.q.mailbox.seen(p) {
                 continue;
             }
-            self.counter.prim();
-            let t_max = self.best.map_or(self.prepared.ray.t_max, |b| b.t);
-            if let Some(h) = tree.prims.intersect(p as usize, &self.prepared, t_max) {
+            self.q.counter.prim();
+            let t_max = self.best.map_or(self.q.prepared.ray.t_max, |b| b.t);
+            if let Some(h) = tree.prims.intersect(p as usize, &self.q.prepared, t_max) {
                 self.best = nearer(self.best, Hit::new(p, h));
             }
         }
         if let Some(child) = child {
             let child = &tree.nodes[child];
-            let beam = narrowed(tr, child, self.inv_max_d);
+            let beam = narrowed(tr, child, self.q.inv_max_d);
             if let Some(from) = child_start(&beam, child, self.limit(&beam)) {
                 self.walk(child, &beam, from);
             }
@@ -137,14 +166,17 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'_, '_, T, P,
 
 /// The state of one any-hit query.
 struct Any<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
-    tree: &'q Octree<'a, T, P>,
-    prepared: PreparedRay<T>,
-    inv_max_d: T,
-    mailbox: Mailbox,
-    counter: &'q mut C,
+    q: Query<'q, 'a, T, P, C>,
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> {
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T, P, C> {
+    /// A query of `tree` for the prepared ray.
+    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+        Self {
+            q: Query::new(tree, prepared, counter),
+        }
+    }
+
     /// Walks grid `node` on beam `tr` from `from` to the end of the beam;
     /// true at the first hit.
     fn walk(&mut self, node: &Node<T>, tr: &TraversalRay<T>, from: T) -> bool {
@@ -168,18 +200,18 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> 
     /// of its child grid, is hit.
     #[inline]
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) -> bool {
-        self.counter.node();
-        let tree = self.tree;
+        self.q.counter.node();
+        let tree = self.q.tree;
         let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
-        let t_max = self.prepared.ray.t_max;
+        let t_max = self.q.prepared.ray.t_max;
         for &p in prims {
-            if self.mailbox.seen(p) {
+            if self.q.mailbox.seen(p) {
                 continue;
             }
-            self.counter.prim();
+            self.q.counter.prim();
             if tree
                 .prims
-                .intersect(p as usize, &self.prepared, t_max)
+                .intersect(p as usize, &self.q.prepared, t_max)
                 .is_some()
             {
                 return true;
@@ -187,14 +219,17 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'_, '_, T, P, C> 
         }
         child.is_some_and(|child| {
             let child = &tree.nodes[child];
-            let beam = narrowed(tr, child, self.inv_max_d);
+            let beam = narrowed(tr, child, self.q.inv_max_d);
             child_start(&beam, child, beam.t_end).is_some_and(|from| self.walk(child, &beam, from))
         })
     }
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
-    /// The nearest hit, counting the work in `counter`.
+    /// The nearest hit, counting the work in `counter`: each part's root
+    /// walked in turn, on the beam of its own box, the later ones with the
+    /// best hit of the earlier. A tree of one part, nearly every tree, takes
+    /// a path of its own that prepares nothing for a ray that misses it.
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
@@ -204,40 +239,43 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
         if self.empty {
             return Ok(None);
         }
-        let root = &self.nodes[0];
-        let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
-            return Ok(None);
-        };
-        let mut q = Nearest {
-            tree: self,
-            prepared: tr.prepared,
-            inv_max_d: tolerance_scale(&tr),
-            mailbox: Mailbox::new(),
-            best: None,
-            counter,
-        };
-        q.walk(root, &tr, tr.t_start);
+        if self.parts == 1 {
+            let root = &self.nodes[0];
+            let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+                return Ok(None);
+            };
+            let mut q = Nearest::new(self, tr.prepared, counter);
+            q.walk(root, &tr, tr.t_start);
+            return Ok(q.best);
+        }
+        let mut q = Nearest::new(self, PreparedRay::new(*ray), counter);
+        for root in &self.nodes[..self.parts] {
+            if let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) {
+                q.walk(root, &tr, tr.t_start);
+            }
+        }
         Ok(q.best)
     }
 
-    /// Whether anything is hit, counting the work in `counter`.
+    /// Whether anything is hit, counting the work in `counter`, part by part
+    /// (a one-part tree as in [`Octree::nearest`]).
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
         ray.validate()?;
         if self.empty {
             return Ok(false);
         }
-        let root = &self.nodes[0];
-        let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
-            return Ok(false);
-        };
-        let mut q = Any {
-            tree: self,
-            prepared: tr.prepared,
-            inv_max_d: tolerance_scale(&tr),
-            mailbox: Mailbox::new(),
-            counter,
-        };
-        Ok(q.walk(root, &tr, tr.t_start))
+        if self.parts == 1 {
+            let root = &self.nodes[0];
+            let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+                return Ok(false);
+            };
+            return Ok(Any::new(self, tr.prepared, counter).walk(root, &tr, tr.t_start));
+        }
+        let mut q = Any::new(self, PreparedRay::new(*ray), counter);
+        Ok(self.nodes[..self.parts].iter().any(|root| {
+            TraversalRay::new(ray, root.geometry.bounds())
+                .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
+        }))
     }
 
     /// Appends the references of every leaf overlapping `region`.
@@ -260,7 +298,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
         if self.empty {
             Aabb::empty()
         } else {
-            *self.nodes[0].geometry.bounds()
+            self.bounds
         }
     }
 
@@ -296,10 +334,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
         if region.is_empty() || self.empty {
             return Ok(Vec::new());
         }
-        let root = &self.nodes[0];
-        let grown = region_search_box(region, root.geometry.bounds());
+        let grown = region_search_box(region, &self.bounds);
         let mut found = Vec::new();
-        self.gather(root, &grown, &mut found);
+        for root in &self.nodes[..self.parts] {
+            self.gather(root, &grown, &mut found);
+        }
         Ok(region_matches(self.prims, region, found))
     }
 

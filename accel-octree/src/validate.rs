@@ -8,7 +8,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     /// Checks the structure's invariants:
     /// - the grids' cells tile the shared cell lists in order, and the lists'
     ///   offsets are monotone and cover the reference array;
-    /// - every grid but the root is linked from exactly one cell of a grid
+    /// - the first grids are the parts' roots, at level 0 and linked from
+    ///   nowhere; every other grid is linked from exactly one cell of a grid
     ///   before it, one level up, lies inside that cell and no deeper than
     ///   the depth limit;
     /// - every grid's reach holds its box, its primitives' bounds and its
@@ -22,8 +23,15 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     pub fn validate(&self) -> Result<(), String> {
         let offsets = self.cells.offsets();
         let total: usize = self.nodes.iter().map(|n| n.geometry.cell_count()).sum();
-        if self.nodes.is_empty() || self.nodes[0].level != 0 {
-            return Err("no root grid".into());
+        if self.parts == 0 || self.parts > self.nodes.len() {
+            return Err(format!(
+                "{} parts for {} grids",
+                self.parts,
+                self.nodes.len()
+            ));
+        }
+        if let Some(i) = (0..self.parts).find(|&i| self.nodes[i].level != 0) {
+            return Err(format!("the root of part {i} is not at level 0"));
         }
         if offsets.len() != total + 1 {
             return Err(format!("{} offsets for {total} cells", offsets.len()));
@@ -99,7 +107,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
                 }
             }
         }
-        if let Some(child) = (1..self.nodes.len()).find(|&i| parents[i] != 1) {
+        if let Some(child) = (self.parts..self.nodes.len()).find(|&i| parents[i] != 1) {
             return Err(format!("grid {child} is linked {} times", parents[child]));
         }
         if let Some(p) = referenced.iter().position(|&r| !r) {

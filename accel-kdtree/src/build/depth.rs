@@ -17,8 +17,8 @@ use accel_core::{Aabb, Real};
 
 /// How much narrower than its node a kept child must be, and how many times
 /// as many primitives as the other child it must hold, for the cut not to
-/// count.
-pub(crate) const ISOLATION: u32 = 16;
+/// count: the factor by which a scene's small dense part is built apart.
+pub(crate) use accel_core::parts::ISOLATION;
 
 /// A node's place on its path: the levels that count towards the depth
 /// limit, and all levels.

@@ -4,7 +4,6 @@
 pub(crate) mod binned;
 pub(crate) mod depth;
 pub(crate) mod events;
-pub(crate) mod parts;
 pub(crate) mod sah;
 pub(crate) mod spares;
 pub(crate) mod split;
@@ -12,6 +11,7 @@ mod unstored;
 
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
+use accel_core::parts;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
 use binned::{BinnedNode, best_binned_split, split_binned};
 use depth::Depth;

@@ -2,16 +2,23 @@
 
 use crate::node::{Entry, entry};
 use crate::{MAX_DEPTH, Octree, OctreeParams, ResolutionRule};
-use accel_core::scenes::{Camera, random_soup, teapot_in_stadium, uv_sphere};
+use accel_core::scenes::{Camera, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
 use accel_core::{
-    Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Real, Sphere, TraversalCounters,
-    TriangleMesh, Vec3,
+    Aabb, Accelerator, BruteForce, BuildError, Hit, PrimitiveSet, Ray, Real, Sphere,
+    TraversalCounters, TriangleMesh, Vec3,
 };
 use accel_grid::Grid;
 
 /// A small teapot in a stadium: 5,000 triangles of sphere in a box of side 1e4.
 fn stadium() -> TriangleMesh<f64> {
     teapot_in_stadium(5_000, 1.0e4)
+}
+
+/// The same sphere in a box whose walls are tiled 20 × 20 and no floor: no
+/// triangle is large, so the scene is one part and one root grid must
+/// isolate the sphere.
+fn tiled_stadium() -> TriangleMesh<f64> {
+    sphere_in_tiled_box(5_000, 1.0e4, 20)
 }
 
 /// The cells of grid `id` of `o` as (linear index, entry).
@@ -137,7 +144,14 @@ fn memory_budget_refuses_the_root_and_caps_the_children() {
     };
     let capped = Octree::with_params(&mesh, &between).unwrap();
     assert_eq!(capped.stats().extra("budget_capped"), Some(1.0));
-    assert!(capped.stats().bytes as u64 <= between.max_bytes);
+    assert!(
+        capped.stats().bytes as u64 <= between.max_bytes,
+        "{} {} {} {}",
+        capped.stats(),
+        between.max_bytes,
+        lo,
+        hi
+    );
     assert!(capped.grid_count() < full.grid_count());
     capped.validate().unwrap();
     assert_matches_brute(&capped, &mesh);
@@ -171,7 +185,7 @@ fn cells_that_refining_cannot_help_stay_leaves() {
 
 #[test]
 fn presets_shape_the_tree_as_documented() {
-    let mesh = stadium();
+    let mesh = tiled_stadium();
     let n = mesh.len() as f64;
 
     let classic = Octree::with_params(&mesh, &OctreeParams::classic()).unwrap();
@@ -367,5 +381,100 @@ fn child_cells_are_no_finer_than_their_primitives() {
     assert_eq!(
         super::no_finer_than_primitives([3, 4, 5], &prims, &boxes, &b),
         [3, 4, 5]
+    );
+}
+
+/// The primitives referenced by grid `id` of `o` and every grid below it.
+fn referenced_below<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    o: &Octree<'_, T, P>,
+    id: usize,
+    out: &mut Vec<u32>,
+) {
+    for (_, e) in entries(o, id) {
+        out.extend_from_slice(e.prims);
+        if let Some(child) = e.child {
+            referenced_below(o, child, out);
+        }
+    }
+}
+
+#[test]
+fn a_small_mesh_among_large_walls_is_built_apart() {
+    let mesh = stadium();
+    let n = mesh.len();
+    // The sphere's triangles come first, then the 12 wall and 2 floor
+    // triangles: each a large primitive.
+    let sphere = n - 14;
+    let o = Octree::new(&mesh).unwrap();
+    o.validate().unwrap();
+    assert_eq!(o.stats().extra("parts"), Some(2.0));
+    let roots: Vec<_> = o.part_roots().collect();
+    assert_eq!(roots.len(), 2);
+    // The first part's root covers the sphere alone; the second, the scene.
+    let sphere_box = (0..sphere).fold(Aabb::empty(), |b, i| {
+        b.union(&PrimitiveSet::bounds(&mesh, i))
+    });
+    assert_eq!(*roots[0].bounds(), sphere_box);
+    assert_eq!(*roots[1].bounds(), o.bounds());
+    assert_eq!(o.bounds(), BruteForce::new(&mesh).unwrap().bounds());
+    let (mut small, mut large) = (Vec::new(), Vec::new());
+    referenced_below(&o, 0, &mut small);
+    referenced_below(&o, 1, &mut large);
+    assert!(small.iter().all(|&p| (p as usize) < sphere));
+    assert!(large.iter().all(|&p| (p as usize) >= sphere));
+    small.sort_unstable();
+    small.dedup();
+    large.sort_unstable();
+    large.dedup();
+    assert_eq!((small.len(), large.len()), (sphere, 14));
+    assert_matches_brute(&o, &mesh);
+
+    // Each part is the octree its primitives alone would get, and a query
+    // is theirs in turn, the second with the first's best hit: the same
+    // answers and the same work, ray by ray.
+    let part = |range: core::ops::Range<usize>| {
+        TriangleMesh::new(mesh.positions().to_vec(), mesh.indices()[range].to_vec()).unwrap()
+    };
+    let (sphere_mesh, walls) = (part(0..sphere), part(sphere..n));
+    let (a, b) = (
+        Octree::new(&sphere_mesh).unwrap(),
+        Octree::new(&walls).unwrap(),
+    );
+    assert_eq!(o.grid_count(), a.grid_count() + b.grid_count());
+    assert_eq!(
+        o.stats().references,
+        a.stats().references + b.stats().references
+    );
+    let camera = Camera::look_at(
+        Vec3::new(3.0, -4.0, 2.0),
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, 1.0),
+        60.0,
+    );
+    let mut hits = [0; 2];
+    for ray in camera.rays::<f64>(32, 32) {
+        let mut whole = TraversalCounters::default();
+        let got = o.intersect_counted(&ray, &mut whole).unwrap();
+        let mut apart = TraversalCounters::default();
+        let first = a.intersect_counted(&ray, &mut apart).unwrap();
+        let rest = first.map_or(ray, |h| {
+            Ray::with_interval(ray.origin, ray.direction, ray.t_min, h.t).unwrap()
+        });
+        let second = b.intersect_counted(&rest, &mut apart).unwrap();
+        let want = second
+            .map(|h| Hit {
+                prim: h.prim + sphere as u32,
+                ..h
+            })
+            .or(first);
+        assert_eq!(got, want, "ray {ray:?}");
+        assert_eq!(whole, apart, "ray {ray:?}");
+        if let Some(h) = got {
+            hits[usize::from(h.prim as usize >= sphere)] += 1;
+        }
+    }
+    assert!(
+        hits[0] > 50 && hits[1] > 50,
+        "rays hit both parts: {hits:?}"
     );
 }

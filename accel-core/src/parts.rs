@@ -1,40 +1,45 @@
 //! Large primitives apart: a small dense part in a large sparse scene.
 //!
-//! In a teapot in a stadium, the stadium's walls and floor straddle every
-//! plane around the teapot, so no cut there leaves an empty side: the SAH
-//! prices halving the teapot as it prices isolating it, cuts through it at
-//! the root, and rays near it walk a deep shell of nodes whose leaves keep
-//! pieces of the walls (on the 100k-triangle sphere in a 10⁴ box, floor rays
-//! visited 29.9 nodes and sphere rays 62.2). Built apart, the sphere's own
-//! tree costs floor rays 4.8 nodes and sphere rays 42.2, and the fourteen
-//! large triangles make a tree of their own (face cuts send each wall to a
-//! flat leaf in its face).
+//! In a teapot in a stadium, the stadium's walls and floor cross every
+//! plane and every cell around the teapot. A kD-tree's SAH finds no empty cut
+//! there, prices halving the teapot as it prices isolating it and cuts
+//! through it at the root; an octree's root cells hold pieces of both. Rays
+//! near the teapot then walk a deep shell of nodes or cells that keep pieces
+//! of the walls (on the 100k-triangle sphere in a 10⁴ box, the kD-tree's
+//! floor rays visited 29.9 nodes and its sphere rays 62.2; built apart, 13.8
+//! and 48.2).
 //!
 //! So a build first sorts out the *large* primitives, whose bounds span at
 //! least 1/[`ISOLATION`] of the scene's largest side. When the others are at
 //! least [`ISOLATION`] times as many and their bounds are at most
-//! 1/[`ISOLATION`] of the scene's extent on every axis (the rule that keeps
-//! isolating cuts from counting towards the depth limit,
-//! [`super::depth`]), each group gets a tree of its own, and a query walks
-//! both (the small part's first, then the large part's with the best hit so
-//! far). Anywhere else the scene stays one part: dense scenes, scans and
-//! terrains have no large primitives, and a room whose furniture fills it has
-//! no small part.
+//! 1/[`ISOLATION`] of the scene's extent on every axis, each group gets a
+//! structure of its own, and a query walks both (the small part's first,
+//! then the large part's with the best hit so far). Anywhere else the scene
+//! stays one part: dense scenes, scans and terrains have no large
+//! primitives, and a room whose furniture fills it has no small part.
 
-use super::depth::ISOLATION;
-use accel_core::{Aabb, Real};
+use crate::{Aabb, Real};
+
+/// How much narrower than the scene a small part must be, on every axis,
+/// and how many times as many primitives as the large part it must hold
+/// (the kD-tree's depth rule uses the same factor for the cuts that isolate
+/// a dense part).
+pub const ISOLATION: u32 = 16;
 
 /// The primitives of one part (ascending) and the bounds of their boxes.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Group<T> {
-    pub(crate) prims: Vec<u32>,
-    pub(crate) bounds: Aabb<T>,
+pub struct Group<T> {
+    /// The primitives' indices, ascending.
+    pub prims: Vec<u32>,
+    /// The union of their boxes.
+    pub bounds: Aabb<T>,
 }
 
 /// The parts of a scene whose primitives have the boxes `boxes` and the
 /// bounds `bounds`: the small primitives, then the large ones, when the
 /// scene splits; all of them otherwise.
-pub(crate) fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Group<T>> {
+#[must_use]
+pub fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Group<T>> {
     let all = || {
         vec![Group {
             prims: (0..boxes.len() as u32).collect(),
@@ -72,7 +77,7 @@ pub(crate) fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Gro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use accel_core::Vec3;
+    use crate::Vec3;
 
     fn cube(c: f64, h: f64) -> Aabb<f64> {
         Aabb::new(Vec3::splat(c - h), Vec3::splat(c + h))
