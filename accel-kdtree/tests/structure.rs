@@ -251,6 +251,42 @@ fn a_small_mesh_among_large_walls_is_built_apart_and_the_walls_cut_off() {
 }
 
 #[test]
+fn the_large_part_is_searched_whatever_the_leaf_size() {
+    // The fast-build preset leaves nodes of up to 4 primitives unsearched.
+    // The large part of a teapot in a stadium (14 walls and floor, crossed
+    // by most rays) is built as if the leaf size were 0: the same nodes as
+    // with `leaf_size: 0`, so its walls are still cut off and a floor ray
+    // tests few triangles (with 4 per leaf it tested 4 walls and floor).
+    let mesh = teapot_in_stadium(5_000, 1.0e4);
+    let fast = KdTree::with_params(&mesh, &KdTreeParams::fast_build()).unwrap();
+    let searched = KdTreeParams {
+        leaf_size: 0,
+        ..KdTreeParams::fast_build()
+    };
+    let exact = KdTree::with_params(&mesh, &searched).unwrap();
+    let (a, b) = (fast.parts()[1].root, exact.parts()[1].root);
+    assert_eq!(fast.nodes().len() - a, exact.nodes().len() - b);
+    for (i, j) in (a..fast.nodes().len()).zip(b..) {
+        let (x, y) = (fast.nodes()[i], exact.nodes()[j]);
+        assert_eq!(x.is_leaf(), y.is_leaf(), "node {i}");
+        assert_eq!(fast.split_position(i), exact.split_position(j), "node {i}");
+        if x.is_leaf() {
+            assert_eq!(fast.leaf_primitives(&x), exact.leaf_primitives(&y));
+        }
+    }
+    // The small part keeps the preset: fewer nodes than searched to the end.
+    assert!(a < b, "small parts: {a} and {b} nodes");
+    let floor = Ray::new(Vec3::new(3.0, -4.0, 2.0), Vec3::new(0.0, 1.0, -1.0)).unwrap();
+    let mut c = accel_core::TraversalCounters::default();
+    let hit = fast.intersect_counted(&floor, &mut c).unwrap().unwrap();
+    assert!(
+        hit.prim as usize >= mesh.triangle_count() - 2,
+        "premise: the floor"
+    );
+    assert!(c.prims <= 4, "{c:?}");
+}
+
+#[test]
 fn a_small_mesh_in_a_huge_box_is_split_as_finely_as_on_its_own() {
     // A sphere in a box 10^4 times wider whose walls are tiled (so that it
     // is one tree, see `tiled_stadium`). The cuts that isolate the sphere

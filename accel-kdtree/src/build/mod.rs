@@ -324,11 +324,23 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut out = Out::new();
     let mut parts = Vec::with_capacity(groups.len());
     let mut references = 0u64;
-    for parts::Group {
-        prims: list,
-        bounds: part_bounds,
-    } in groups
+    // The large primitives of a scene in parts are few (at most 1/16 of the
+    // small ones) and each is crossed by many rays: their tree searches
+    // every node, whatever the preset's leaf size.
+    let searched = KdTreeParams {
+        leaf_size: 0,
+        ..params.clone()
+    };
+    for (
+        index,
+        parts::Group {
+            prims: list,
+            bounds: part_bounds,
+        },
+    ) in groups.into_iter().enumerate()
     {
+        // The small part, or a whole scene, keeps the preset.
+        let params = if index == 0 { params } else { &searched };
         // A whole scene's part takes the boxes as they are (no copy).
         let part_boxes: Vec<Aabb<T>> = if whole {
             core::mem::take(&mut boxes)
