@@ -96,7 +96,7 @@ fn node<T: Real, P: PrimitiveSet<T> + ?Sized>(
     depth: Depth,
     out: &mut Out<T>,
 ) {
-    let split = if ctx.leaf_without_search(items.len(), depth) {
+    let split = if ctx.leaf_without_search(items.iter().map(|it| it.prim), depth) {
         None
     } else {
         Sah::new(ctx.params, &bounds).and_then(|sah| choose(&sah, &items))

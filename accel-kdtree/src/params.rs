@@ -45,9 +45,10 @@ pub struct KdTreeParams {
     pub max_depth: Option<u32>,
     /// Nodes with at most this many primitives become leaves without an SAH
     /// search (pbrt's `maxPrims`, which is 1; 0 means only the SAH decides).
-    /// Default 2. The large part of a scene built in parts
-    /// ([`crate::KdTree::parts`]) is searched to the end whatever this says:
-    /// its few primitives are crossed by most rays.
+    /// Default 2. A node holding a large primitive (bounds spanning at least
+    /// 1/16 of the scene's largest side, as in [`accel_core::parts`]) is
+    /// searched whatever this says: such primitives are few and crossed by
+    /// many rays (a stadium's walls, a box's faces).
     pub leaf_size: u32,
     /// The most primitive references the leaves may hold in all (perfect
     /// splits duplicate straddling primitives); more is refused with

@@ -1,8 +1,12 @@
 //! The tree's shape: real splits, the naive build on a scene large enough to
 //! be built in parallel, named edge cases, and typed errors.
 
-use accel_core::scenes::{random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
-use accel_core::{Aabb, Accelerator, BruteForce, BuildError, Ray, Sphere, TriangleMesh, Vec3};
+use accel_core::scenes::{
+    box_mesh, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere,
+};
+use accel_core::{
+    Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Ray, Sphere, TriangleMesh, Vec3,
+};
 use accel_kdtree::{KdTree, KdTreeParams};
 
 fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized>(
@@ -250,30 +254,46 @@ fn a_small_mesh_among_large_walls_is_built_apart_and_the_walls_cut_off() {
     assert!(c.prims <= 4, "{c:?}");
 }
 
+/// Asserts that the nodes of `x` from `a` on equal those of `y` from `b`.
+fn same_nodes_from<P: PrimitiveSet<f64> + ?Sized>(
+    x: &KdTree<'_, f64, P>,
+    a: usize,
+    y: &KdTree<'_, f64, P>,
+    b: usize,
+) {
+    assert_eq!(x.nodes().len() - a, y.nodes().len() - b);
+    for (i, j) in (a..x.nodes().len()).zip(b..) {
+        let (p, q) = (x.nodes()[i], y.nodes()[j]);
+        assert_eq!(p.is_leaf(), q.is_leaf(), "node {i}");
+        assert_eq!(x.split_position(i), y.split_position(j), "node {i}");
+        if p.is_leaf() {
+            assert_eq!(x.leaf_primitives(&p), y.leaf_primitives(&q));
+        }
+    }
+}
+
 #[test]
-fn the_large_part_is_searched_whatever_the_leaf_size() {
-    // The fast-build preset leaves nodes of up to 4 primitives unsearched.
-    // The large part of a teapot in a stadium (14 walls and floor, crossed
-    // by most rays) is built as if the leaf size were 0: the same nodes as
-    // with `leaf_size: 0`, so its walls are still cut off and a floor ray
-    // tests few triangles (with 4 per leaf it tested 4 walls and floor).
-    let mesh = teapot_in_stadium(5_000, 1.0e4);
-    let fast = KdTree::with_params(&mesh, &KdTreeParams::fast_build()).unwrap();
+fn large_primitives_are_searched_whatever_the_leaf_size() {
+    // The fast-build preset leaves nodes of up to 4 primitives unsearched,
+    // but not nodes holding a large primitive (crossed by most rays). A box
+    // of 12 triangles gets the tree of `leaf_size: 0`, each face cut off
+    // (with 4 per leaf, rays tested up to 4 faces).
     let searched = KdTreeParams {
         leaf_size: 0,
         ..KdTreeParams::fast_build()
     };
+    let cube = box_mesh(&Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)), 1);
+    let fast = KdTree::with_params(&cube, &KdTreeParams::fast_build()).unwrap();
+    let exact = KdTree::with_params(&cube, &searched).unwrap();
+    same_nodes_from(&fast, 0, &exact, 0);
+    assert!(fast.nodes().len() > 1);
+    // The large part of a teapot in a stadium (14 walls and floor) alike:
+    // its walls are still cut off and a floor ray tests few triangles.
+    let mesh = teapot_in_stadium(5_000, 1.0e4);
+    let fast = KdTree::with_params(&mesh, &KdTreeParams::fast_build()).unwrap();
     let exact = KdTree::with_params(&mesh, &searched).unwrap();
     let (a, b) = (fast.parts()[1].root, exact.parts()[1].root);
-    assert_eq!(fast.nodes().len() - a, exact.nodes().len() - b);
-    for (i, j) in (a..fast.nodes().len()).zip(b..) {
-        let (x, y) = (fast.nodes()[i], exact.nodes()[j]);
-        assert_eq!(x.is_leaf(), y.is_leaf(), "node {i}");
-        assert_eq!(fast.split_position(i), exact.split_position(j), "node {i}");
-        if x.is_leaf() {
-            assert_eq!(fast.leaf_primitives(&x), exact.leaf_primitives(&y));
-        }
-    }
+    same_nodes_from(&fast, a, &exact, b);
     // The small part keeps the preset: fewer nodes than searched to the end.
     assert!(a < b, "small parts: {a} and {b} nodes");
     let floor = Ray::new(Vec3::new(3.0, -4.0, 2.0), Vec3::new(0.0, 1.0, -1.0)).unwrap();

@@ -114,18 +114,39 @@ pub(crate) struct Ctx<'p, T, P: ?Sized> {
     pub(crate) prims: &'p P,
     pub(crate) params: &'p KdTreeParams,
     pub(crate) depth_limit: u32,
+    /// The scene's largest side: a primitive whose bounds span at least
+    /// 1/[`parts::ISOLATION`] of it is large, as [`parts::partition`] says.
+    scene_side: T,
     refs: AtomicU64,
     failed: AtomicBool,
     _t: core::marker::PhantomData<T>,
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
-    /// True when a node of `n` primitives at `depth` is a leaf without a search.
-    pub(crate) fn leaf_without_search(&self, n: usize, depth: Depth) -> bool {
+    /// True when a node of the primitives `prims` at `depth` is a leaf
+    /// without a search. A node of at most [`KdTreeParams::leaf_size`]
+    /// primitives is one unless it holds a large primitive: few and crossed
+    /// by many rays (a wall, a box's face), those are worth a search however
+    /// few they are.
+    pub(crate) fn leaf_without_search(
+        &self,
+        prims: impl ExactSizeIterator<Item = u32>,
+        depth: Depth,
+    ) -> bool {
+        let n = prims.len();
         n == 0
-            || n <= self.params.leaf_size as usize
+            || (n <= self.params.leaf_size as usize && !self.any_large(prims))
             || depth.exhausted(self.depth_limit)
             || self.failed.load(Ordering::Relaxed)
+    }
+
+    /// Whether any of `prims` is large.
+    fn any_large(&self, mut prims: impl Iterator<Item = u32>) -> bool {
+        prims.any(|p| {
+            let b = self.prims.bounds(p as usize);
+            (b.max - b.min).max_component() * T::from_f64(f64::from(parts::ISOLATION))
+                >= self.scene_side
+        })
     }
 
     /// Counts a leaf's references against the budget.
@@ -143,7 +164,7 @@ fn choose<T: Real, P: PrimitiveSet<T> + ?Sized>(
     node: &NodeWork<T>,
 ) -> Option<Split<T>> {
     let n = node.prims.len();
-    if ctx.leaf_without_search(n, node.depth) {
+    if ctx.leaf_without_search(node.prims.iter().copied(), node.depth) {
         return None;
     }
     let sah = Sah::new(ctx.params, &node.bounds)?;
@@ -213,7 +234,9 @@ fn build_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
     node: BinnedNode<T>,
 ) -> Piece<T> {
     let n = node.prims.len();
-    if n <= ctx.params.binned_above || ctx.leaf_without_search(n, node.depth) {
+    if n <= ctx.params.binned_above
+        || ctx.leaf_without_search(node.prims.iter().copied(), node.depth)
+    {
         return build_piece(ctx, node.into_events());
     }
     let split = Sah::new(ctx.params, &node.bounds).and_then(|sah| {
@@ -324,23 +347,12 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut out = Out::new();
     let mut parts = Vec::with_capacity(groups.len());
     let mut references = 0u64;
-    // The large primitives of a scene in parts are few (at most 1/16 of the
-    // small ones) and each is crossed by many rays: their tree searches
-    // every node, whatever the preset's leaf size.
-    let searched = KdTreeParams {
-        leaf_size: 0,
-        ..params.clone()
-    };
-    for (
-        index,
-        parts::Group {
-            prims: list,
-            bounds: part_bounds,
-        },
-    ) in groups.into_iter().enumerate()
+    let scene_side = (bounds.max - bounds.min).max_component();
+    for parts::Group {
+        prims: list,
+        bounds: part_bounds,
+    } in groups
     {
-        // The small part, or a whole scene, keeps the preset.
-        let params = if index == 0 { params } else { &searched };
         // A whole scene's part takes the boxes as they are (no copy).
         let part_boxes: Vec<Aabb<T>> = if whole {
             core::mem::take(&mut boxes)
@@ -352,6 +364,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             prims,
             params,
             depth_limit,
+            scene_side,
             refs: AtomicU64::new(references),
             failed: AtomicBool::new(false),
             _t: core::marker::PhantomData,
