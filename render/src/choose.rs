@@ -64,9 +64,13 @@
 //!   [`FINE_GRID_MAX`] primitives;
 //! - the kD-tree's fast-build preset was the best or within 6% of the best
 //!   kD-tree on every scene and budget (its larger leaves trace as fast as
-//!   the default's on triangles), so it is the kD-tree candidate;
+//!   the default's on triangles), so it is the kD-tree candidate; since
+//!   (docs/choose-bench-2026-12-02.txt) it is within 10% on every final
+//!   render, and on previews of the scans the pbrt preset builds faster
+//!   and leads the kD-trees by up to 1.5×, where a grid wins anyway;
 //! - the octree's two-level preset builds about 4× faster than the default
-//!   on "teapot in a stadium" and wins its small budget.
+//!   on "teapot in a stadium" (1.3× since the octree builds the sphere
+//!   apart) and wins its small budget.
 //!
 //! Timings are wall-clock on the current rayon pool, as the render will run;
 //! on a busy machine they are noisy, and so is the choice between candidates
