@@ -118,7 +118,10 @@ pub fn scene(place: BoxedStrategy<Placement>) -> BoxedStrategy<SceneSpec> {
         4 => (prop::collection::vec(lattice_tri(), 1..16), p())
             .prop_map(|(t, p)| SceneSpec::Lattice(t, p)),
         5 => (closed_shape(true), p()).prop_map(|(s, p)| SceneSpec::Closed(s, p)),
-        2 => (prop_oneof![20usize..160, 260usize..400], prop::sample::select(vec![8.0, 100.0, 1e4]), p())
+        2 => (20usize..160, prop::sample::select(vec![8.0, 100.0, 1e4]), p())
+            .prop_map(|(dense, stadium, place)| SceneSpec::Teapot { dense, stadium, place }),
+        // Large enough to be built in parts (see `SceneSpec::Teapot`).
+        2 => (260usize..400, prop::sample::select(vec![100.0, 1e4]), p())
             .prop_map(|(dense, stadium, place)| SceneSpec::Teapot { dense, stadium, place }),
         2 => (prop::collection::vec([[unit(), unit()], [unit(), unit()], [unit(), unit()]], 1..16), p())
             .prop_map(|(t, p)| SceneSpec::Flat(t, p)),
