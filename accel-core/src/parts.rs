@@ -35,6 +35,15 @@ pub struct Group<T> {
     pub bounds: Aabb<T>,
 }
 
+/// Whether a primitive with bounds `b` is large in a scene whose largest
+/// side is `scene_side`: its bounds span at least 1/[`ISOLATION`] of it
+/// along some axis.
+#[inline]
+#[must_use]
+pub fn is_large<T: Real>(b: &Aabb<T>, scene_side: T) -> bool {
+    (b.max - b.min).max_component() * T::from_f64(f64::from(ISOLATION)) >= scene_side
+}
+
 /// The parts of a scene whose primitives have the boxes `boxes` and the
 /// bounds `bounds`: the small primitives, then the large ones, when the
 /// scene splits; all of them otherwise.
@@ -58,7 +67,7 @@ pub fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Group<T>> 
     };
     let (mut small, mut large) = (empty(), empty());
     for (i, b) in boxes.iter().enumerate() {
-        let group = if (b.max - b.min).max_component() * factor >= largest {
+        let group = if is_large(b, largest) {
             &mut large
         } else {
             &mut small

@@ -166,8 +166,8 @@ mod tests {
 
     #[test]
     fn a_tree_narrows_its_beam_only_where_the_scene_dwarfs_its_primitives() {
-        use accel_core::scenes::{box_mesh, uv_sphere};
-        use accel_core::{TriangleMesh, Vec3};
+        use accel_core::TriangleMesh;
+        use accel_core::scenes::sphere_in_tiled_box;
         // The same dense sphere (triangles about 0.06 across) in a stadium of
         // side 10^4, where the query beam is about 0.02 wide, and of side 10,
         // where it is about 2e-5. The walls are tiled 20 × 20 per face, so
@@ -175,11 +175,7 @@ mod tests {
         // (`accel_core::parts`), where each part's beam is its own, and
         // the median triangle is still one of the sphere's.
         for (stadium, narrows) in [(1e4, true), (10.0, false)] {
-            let mut mesh = uv_sphere(Vec3::ZERO, 1.0, 8000);
-            let h = stadium / 2.0;
-            mesh.append(&box_mesh(&Aabb::new(Vec3::splat(-h), Vec3::splat(h)), 20))
-                .unwrap();
-            let mesh: TriangleMesh<f32> = mesh.cast().unwrap();
+            let mesh: TriangleMesh<f32> = sphere_in_tiled_box(8000, stadium, 20).cast().unwrap();
             let tree = KdTree::new(&mesh).unwrap();
             assert_eq!(tree.parts().len(), 1, "premise: one part");
             assert_eq!(!tree.reach.is_empty(), narrows, "stadium {stadium}");

@@ -114,8 +114,7 @@ pub(crate) struct Ctx<'p, T, P: ?Sized> {
     pub(crate) prims: &'p P,
     pub(crate) params: &'p KdTreeParams,
     pub(crate) depth_limit: u32,
-    /// The scene's largest side: a primitive whose bounds span at least
-    /// 1/[`parts::ISOLATION`] of it is large, as [`parts::partition`] says.
+    /// The scene's largest side, for [`parts::is_large`].
     scene_side: T,
     refs: AtomicU64,
     failed: AtomicBool,
@@ -142,11 +141,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
 
     /// Whether any of `prims` is large.
     fn any_large(&self, mut prims: impl Iterator<Item = u32>) -> bool {
-        prims.any(|p| {
-            let b = self.prims.bounds(p as usize);
-            (b.max - b.min).max_component() * T::from_f64(f64::from(parts::ISOLATION))
-                >= self.scene_side
-        })
+        prims.any(|p| parts::is_large(&self.prims.bounds(p as usize), self.scene_side))
     }
 
     /// Counts a leaf's references against the budget.
