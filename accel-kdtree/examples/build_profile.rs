@@ -3,7 +3,8 @@
 //! binned SAH above a node size and a bin count:
 //! `cargo run --release -p accel-kdtree --example build_profile -- N|SCENE|FILE.glb [BINNED_ABOVE] [BINS]`;
 //! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `KD_MAX_DEPTH=d`
-//! sets the depth limit, `THREADS=n` builds on `n` threads.
+//! sets the depth limit, `KD_LEAF_SIZE=n` and `KD_TRAVERSAL_COST=c` override
+//! the preset's, `THREADS=n` builds on `n` threads.
 
 use accel_core::Accelerator;
 use accel_core::scenes::{GeneratedScene, terrain};
@@ -44,6 +45,18 @@ fn main() {
         .and_then(|s| s.parse().ok())
     {
         params.max_depth = Some(depth);
+    }
+    if let Some(n) = std::env::var("KD_LEAF_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        params.leaf_size = n;
+    }
+    if let Some(c) = std::env::var("KD_TRAVERSAL_COST")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        params.traversal_cost = c;
     }
     if let Some(above) = std::env::args().nth(2).and_then(|s| s.parse().ok()) {
         params.binned_above = above;
