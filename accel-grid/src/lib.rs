@@ -6,7 +6,8 @@
 //! `m³·n` cells (density `m = 2` by default, the seed's 8 cells per object),
 //! extended to flat and nearly flat scenes ([`resolution`]). Cells are stored
 //! compactly ([`csr::CellLists`]: one offset per cell, one reference array),
-//! built in two parallel passes (count, then fill) with rayon. A triangle is
+//! built from one parallel pass (rayon) that records each primitive's cells,
+//! which are then counted per cell and placed without atomics. A triangle is
 //! placed only in the cells it truly overlaps (Akenine-Möller's triangle–box
 //! test), not in every cell of its bounding box.
 //!

@@ -31,7 +31,7 @@
 //!   part is refined as if it stood alone, not cut by the root cells of the
 //!   whole scene, and rays that pass it by never enter its grids.
 //! - **Reuse.** Every grid is an `accel-grid` [`GridGeometry`](accel_grid::cells::GridGeometry)
-//!   (point-to-cell, cell bounds), filled by its two-pass CSR build
+//!   (point-to-cell, cell bounds), filled by its CSR build
 //!   ([`CellLists`](accel_grid::csr::CellLists), [`PrimitiveCells`](accel_grid::build::PrimitiveCells))
 //!   and walked by its conservative 3D-DDA ([`BeamWalk`](accel_grid::dda::BeamWalk),
 //!   Amanatides & Woo 1987). All grids' cells share one CSR array, a refined
