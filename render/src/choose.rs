@@ -65,7 +65,7 @@
 //! - the kD-tree's fast-build preset was the best or within 6% of the best
 //!   kD-tree on every scene and budget (its larger leaves trace as fast as
 //!   the default's on triangles), so it is the kD-tree candidate; since
-//!   (docs/choose-bench-2026-12-02.txt) it is within 10% on every final
+//!   (docs/choose-bench-2026-12-02.txt, -2026-12-03.txt) it is within 10% on every final
 //!   render, and on previews of the scans the pbrt preset builds faster
 //!   and leads the kD-trees by up to 1.5×, where a grid wins anyway;
 //! - the octree's two-level preset builds about 4× faster than the default
