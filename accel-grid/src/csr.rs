@@ -50,6 +50,7 @@ impl CellLists {
             cell_count,
             item_count as usize,
             |i| i as u32,
+            true,
             max_references,
             visitor,
         )
@@ -73,6 +74,7 @@ impl CellLists {
             cell_count,
             items.len(),
             |i| items[i],
+            items.is_sorted(),
             max_references,
             visitor,
         )
@@ -115,18 +117,20 @@ impl CellLists {
     /// record, so the visitor's work (for triangles, the exact triangle-box
     /// tests that dominate the build) is done once, at the cost of a
     /// temporary 4 bytes per reference. Grids with more cells than `u32`
-    /// indexes ask the visitor again instead.
+    /// indexes ask the visitor again instead. `ascending` tells whether the
+    /// ids ascend with `i` (then the recorded path needs no sort).
     fn build_with<V: CellVisitor>(
         cell_count: usize,
         len: usize,
         id: impl Fn(usize) -> u32 + Sync,
+        ascending: bool,
         max_references: u64,
         visitor: &V,
     ) -> Result<Self, BuildError> {
         let budget = max_references.min(u64::from(u32::MAX));
         if u32::try_from(cell_count).is_ok() {
             return match record_cells(len, &id, budget, visitor) {
-                Ok(tasks) => place_recorded(cell_count, &tasks, &id, budget),
+                Ok(tasks) => place_recorded(cell_count, &tasks, &id, ascending, budget),
                 // The record stopped early; count the whole need for the error.
                 Err(()) => Err(over_budget(count_references(len, &id, visitor), budget)),
             };
@@ -380,17 +384,18 @@ const PARALLEL_COUNT: usize = 1 << 16;
 /// contiguous range per thread, and each range's task reads the whole record
 /// (a sequential read) and counts the references of its own cells. The
 /// references are then placed by one task, in record order, so each cell
-/// receives its items in order: its list is ascending when the ids are, and
-/// sorted afterwards otherwise. Placing is a scatter bound by first-touch
+/// receives its items in order: its list is ascending when the ids are
+/// (`ascending`), and sorted afterwards otherwise. Placing is a scatter bound by first-touch
 /// page faults on the new arrays (the 1M terrain's grid: 8M offsets and 3.4M
 /// references), which the kernel serializes: split over two threads on a
 /// 2-core machine it took longer than in one (148 against 167 ms for the
 /// whole build, medians of 6 rounds), where an atomic increment per
-/// reference had made one thread's build 1.29x slower.
+/// reference had made one thread's build about 1.3x slower.
 fn place_recorded(
     cell_count: usize,
     tasks: &[RecordedTask],
     id: &(impl Fn(usize) -> u32 + Sync),
+    ascending: bool,
     budget: u64,
 ) -> Result<CellLists, BuildError> {
     let recorded: usize = tasks.iter().map(|t| t.cells.len()).sum();
@@ -416,6 +421,8 @@ fn place_recorded(
                 }
             }
         });
+    // A serial scan, not `exclusive_prefix_sum`: it touches the offsets'
+    // pages still untouched (empty cells) from one thread, as placing does.
     let mut running = 0u64;
     for c in &mut offsets[1..] {
         let count = u64::from(*c);
@@ -443,11 +450,6 @@ fn place_recorded(
         }
     }
     debug_assert_eq!(offsets[cell_count] as u64, running);
-    let ascending = tasks
-        .iter()
-        .flat_map(|t| t.first..t.first + t.ends.len())
-        .map(id)
-        .is_sorted();
     if !ascending {
         sort_each_cell(&offsets, &mut refs);
     }
@@ -467,13 +469,18 @@ fn over_budget(needed: u64, budget: u64) -> BuildError {
 mod tests {
     use super::*;
 
-    /// Item i belongs to cells i % 5 and (i * 3) % 7, once each.
-    struct Modular;
+    /// Item i belongs to cells `i % first` and `(i * factor) % second`,
+    /// once each.
+    struct TwoCells {
+        first: usize,
+        factor: usize,
+        second: usize,
+    }
 
-    impl CellVisitor for Modular {
+    impl CellVisitor for TwoCells {
         fn visit<F: FnMut(usize)>(&self, item: u32, mut cell: F) {
-            let a = item as usize % 5;
-            let b = (item as usize * 3) % 7;
+            let a = item as usize % self.first;
+            let b = (item as usize * self.factor) % self.second;
             cell(a);
             if b != a {
                 cell(b);
@@ -481,13 +488,20 @@ mod tests {
         }
     }
 
+    /// Cells i % 5 and (i * 3) % 7 of 7.
+    const MODULAR: TwoCells = TwoCells {
+        first: 5,
+        factor: 3,
+        second: 7,
+    };
+
     #[test]
     fn lists_match_a_direct_construction() {
         let items = 10_000u32;
-        let lists = CellLists::build(7, items, u64::MAX, &Modular).unwrap();
+        let lists = CellLists::build(7, items, u64::MAX, &MODULAR).unwrap();
         let mut expected = vec![Vec::new(); 7];
         for i in 0..items {
-            Modular.visit(i, |c| expected[c].push(i));
+            MODULAR.visit(i, |c| expected[c].push(i));
         }
         for (c, want) in expected.iter().enumerate() {
             assert_eq!(lists.cell(c), want.as_slice(), "cell {c}");
@@ -505,24 +519,24 @@ mod tests {
         // The error reports the whole need, counted directly.
         let mut all = 0u64;
         for i in 0..100 {
-            Modular.visit(i, |_| all += 1);
+            MODULAR.visit(i, |_| all += 1);
         }
-        let err = CellLists::build(7, 100, 150, &Modular).unwrap_err();
+        let err = CellLists::build(7, 100, 150, &MODULAR).unwrap_err();
         assert!(matches!(
             err,
             BuildError::BudgetExceeded { needed, budget: 150, .. } if needed == all
         ));
-        assert!(CellLists::build(7, 100, all, &Modular).is_ok());
-        assert!(CellLists::build(7, 100, all - 1, &Modular).is_err());
+        assert!(CellLists::build(7, 100, all, &MODULAR).is_ok());
+        assert!(CellLists::build(7, 100, all - 1, &MODULAR).is_err());
     }
 
     #[test]
     fn item_subsets_hold_their_own_ids() {
         let items = [3u32, 17, 40, 41, 9_999];
-        let lists = CellLists::build_items(7, &items, u64::MAX, &Modular).unwrap();
+        let lists = CellLists::build_items(7, &items, u64::MAX, &MODULAR).unwrap();
         let mut expected = vec![Vec::new(); 7];
         for &i in &items {
-            Modular.visit(i, |c| expected[c].push(i));
+            MODULAR.visit(i, |c| expected[c].push(i));
         }
         for e in &mut expected {
             e.sort_unstable();
@@ -530,30 +544,23 @@ mod tests {
         for (c, want) in expected.iter().enumerate() {
             assert_eq!(lists.cell(c), want.as_slice(), "cell {c}");
         }
-        let all = CellLists::build(7, 50, u64::MAX, &Modular).unwrap();
+        let all = CellLists::build(7, 50, u64::MAX, &MODULAR).unwrap();
         let every: Vec<u32> = (0..50).collect();
         assert_eq!(
-            CellLists::build_items(7, &every, u64::MAX, &Modular).unwrap(),
+            CellLists::build_items(7, &every, u64::MAX, &MODULAR).unwrap(),
             all
         );
-        let err = CellLists::build_items(7, &items, 3, &Modular).unwrap_err();
+        let err = CellLists::build_items(7, &items, 3, &MODULAR).unwrap_err();
         assert!(matches!(err, BuildError::BudgetExceeded { budget: 3, .. }));
     }
 
-    /// Item i belongs to cells i % 1009 and (i * 7) % 1013 of 1013 cells:
-    /// many cells, so that threads count ranges of them.
-    struct Wide;
-
-    impl CellVisitor for Wide {
-        fn visit<F: FnMut(usize)>(&self, item: u32, mut cell: F) {
-            let a = item as usize % 1009;
-            let b = (item as usize * 7) % 1013;
-            cell(a);
-            if b != a {
-                cell(b);
-            }
-        }
-    }
+    /// Cells i % 1009 and (i * 7) % 1013 of 1013: many cells, so that
+    /// threads count ranges of them.
+    const WIDE: TwoCells = TwoCells {
+        first: 1009,
+        factor: 7,
+        second: 1013,
+    };
 
     #[test]
     fn ranges_counted_by_several_threads_give_the_same_lists() {
@@ -565,13 +572,13 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| CellLists::build(1013, items, u64::MAX, &Wide).unwrap())
+                .install(|| CellLists::build(1013, items, u64::MAX, &WIDE).unwrap())
         };
         let three = build(3);
         assert!(three.reference_count() >= PARALLEL_COUNT);
         let mut expected = vec![Vec::new(); 1013];
         for i in 0..items {
-            Wide.visit(i, |c| expected[c].push(i));
+            WIDE.visit(i, |c| expected[c].push(i));
         }
         for (c, want) in expected.iter().enumerate() {
             assert_eq!(three.cell(c), want.as_slice(), "cell {c}");
@@ -582,10 +589,10 @@ mod tests {
     #[test]
     fn items_in_any_order_end_up_ascending_in_each_cell() {
         let items: Vec<u32> = (0..2_000u32).rev().map(|i| i * 3 + 1).collect();
-        let lists = CellLists::build_items(7, &items, u64::MAX, &Modular).unwrap();
+        let lists = CellLists::build_items(7, &items, u64::MAX, &MODULAR).unwrap();
         let mut expected = vec![Vec::new(); 7];
         for &i in &items {
-            Modular.visit(i, |c| expected[c].push(i));
+            MODULAR.visit(i, |c| expected[c].push(i));
         }
         for (c, want) in expected.iter_mut().enumerate() {
             want.sort_unstable();
@@ -610,7 +617,7 @@ mod tests {
 
     #[test]
     fn no_items_gives_empty_cells() {
-        let lists = CellLists::build(3, 0, 10, &Modular).unwrap();
+        let lists = CellLists::build(3, 0, 10, &MODULAR).unwrap();
         assert_eq!(lists.empty_cells(), 3);
         assert!(lists.cell(2).is_empty());
         assert_eq!(lists.max_cell_len(), 0);
