@@ -1,8 +1,9 @@
 //! Compact cell lists: one offset per cell and one reference array (CSR).
 //!
 //! Built from one parallel pass over the items, which records each item's
-//! cells: the references of each cell are counted from the record, the
-//! counts turned into offsets, then every reference placed. An empty
+//! cells, bucketed by ranges of cells: then each range, in parallel, counts
+//! its cells' references from its buckets, turns the counts into offsets
+//! and places its references, in item order. An empty
 //! cell costs one `u32`. Each cell's references end up sorted ascending, so the
 //! build is deterministic whatever the thread count. The items are `0..n`
 //! ([`CellLists::build`]) or any list of ids ([`CellLists::build_items`]: the
@@ -113,8 +114,8 @@ impl CellLists {
     /// The two-pass build over items `id(0) .. id(len - 1)`.
     ///
     /// Pass 1 asks the visitor about each item once and records the item's
-    /// cells per task; the lists are then counted and placed from that
-    /// record, so the visitor's work (for triangles, the exact triangle-box
+    /// cells per task and range of cells; the lists are then counted and
+    /// placed from that record, range by range, so the visitor's work (for triangles, the exact triangle-box
     /// tests that dominate the build) is done once, at the cost of a
     /// temporary 4 bytes per reference. Grids with more cells than `u32`
     /// indexes ask the visitor again instead. `ascending` tells whether the
@@ -129,8 +130,9 @@ impl CellLists {
     ) -> Result<Self, BuildError> {
         let budget = max_references.min(u64::from(u32::MAX));
         if u32::try_from(cell_count).is_ok() {
-            return match record_cells(len, &id, budget, visitor) {
-                Ok(tasks) => place_recorded(cell_count, &tasks, &id, ascending, budget),
+            let ranges = CellRanges::new(cell_count, len, rayon::current_num_threads());
+            return match record_cells(len, &id, ranges, budget, visitor) {
+                Ok(tasks) => place_recorded(cell_count, &tasks, &id, ranges, ascending, budget),
                 // The record stopped early; count the whole need for the error.
                 Err(()) => Err(over_budget(count_references(len, &id, visitor), budget)),
             };
@@ -139,7 +141,7 @@ impl CellLists {
         // slots[c + 1] counts cell c in the first pass, holds its start
         // before the second and its end after it; slots[0] stays 0. The
         // array becomes the offsets.
-        let slots = zeroed_atomics(cell_count + 1);
+        let slots: Vec<AtomicU32> = written_zeros(cell_count + 1);
         let cells = &slots[1..];
         (0..len)
             .into_par_iter()
@@ -156,7 +158,7 @@ impl CellLists {
         }
         let total = running as usize;
         let slots: Vec<AtomicU32> = slots.into_iter().map(AtomicU32::new).collect();
-        let refs = zeroed_atomics(total);
+        let refs: Vec<AtomicU32> = written_zeros(total);
         let cells = &slots[1..];
         (0..len)
             .into_par_iter()
@@ -250,14 +252,24 @@ impl CellLists {
 /// Cells per parallel chunk of the build's linear passes over cells.
 const CELLS_PER_CHUNK: usize = 1 << 16;
 
-/// `len` zeroed atomics, written in parallel: a grid's offsets are its
-/// largest array (8 million cells for the 1M terrain), and serial passes
-/// over them held back the build's scaling with threads.
-fn zeroed_atomics(len: usize) -> Vec<AtomicU32> {
+/// `len` zeros (plain or atomic counters), written in parallel rather than
+/// allocated zeroed.
+///
+/// A grid's offsets are its largest array (8 million cells for the 1M
+/// terrain), and serial passes over them held back the build's scaling with
+/// threads. The counts then increment each entry, and a page of a zeroed
+/// allocation that is read first maps the kernel's shared zero page; the
+/// write that follows replaces it, which flushes the translation caches of
+/// every other thread of the process (an interprocessor interrupt, very
+/// costly in a virtual machine). With two threads counting and scanning a
+/// fresh zeroed offsets array, the terrain's placement took 55 ms, against
+/// 39 ms on one thread and 23 ms on two with the array written first
+/// (a page written first faults once, with no flush).
+fn written_zeros<Z: Default + Send>(len: usize) -> Vec<Z> {
     (0..len)
         .into_par_iter()
         .with_min_len(CELLS_PER_CHUNK)
-        .map(|_| AtomicU32::new(0))
+        .map(|_| Z::default())
         .collect()
 }
 
@@ -332,22 +344,79 @@ fn count_references<V: CellVisitor>(
         .sum()
 }
 
-/// The cells of a run of consecutive items, as pass 1 recorded them.
+/// The cells split into ranges of `1 << shift` consecutive cells, the last
+/// one shorter: the unit of the record's buckets and of the parallel count,
+/// scan and placement.
+#[derive(Clone, Copy, Debug)]
+struct CellRanges {
+    shift: u32,
+    count: usize,
+}
+
+/// Bits of a recorded entry that hold the item's position in its task.
+const POSITION_BITS: u32 = ITEMS_PER_TASK.trailing_zeros();
+/// Those bits.
+const POSITION_MASK: u32 = (1 << POSITION_BITS) - 1;
+/// The longest range is `1 << MAX_SHIFT` cells: a cell's index within its
+/// range fits in the entry's remaining bits.
+const MAX_SHIFT: u32 = u32::BITS - POSITION_BITS;
+const _: () = assert!(ITEMS_PER_TASK.is_power_of_two());
+
+impl CellRanges {
+    /// Ranges of a power-of-two length (so that a cell's range is a shift,
+    /// not a division) of at most `1 << MAX_SHIFT` cells: one range for
+    /// small builds or one thread where the cells allow, else `threads` to
+    /// `2·threads` ranges (or more, for grids of more than
+    /// `threads << MAX_SHIFT` cells).
+    fn new(cell_count: usize, items: usize, threads: usize) -> Self {
+        let shift = if threads <= 1 || items < PARALLEL_ITEMS || cell_count < 2 * threads {
+            MAX_SHIFT
+        } else {
+            // 2^shift <= cell_count / threads < 2^(shift + 1).
+            (cell_count / threads).ilog2().min(MAX_SHIFT)
+        };
+        Self {
+            shift,
+            count: cell_count.div_ceil(1 << shift).max(1),
+        }
+    }
+
+    /// The bits of a cell index that give its index within its range; the
+    /// bits above them, `c >> shift`, give the range.
+    #[inline]
+    fn mask(self) -> u32 {
+        (1 << self.shift) - 1
+    }
+
+    /// Cells per range (the last may hold fewer), for chunking a per-cell
+    /// array of `cell_count` entries.
+    fn len(self, cell_count: usize) -> usize {
+        (1usize << self.shift).min(cell_count).max(1)
+    }
+}
+
+/// Builds with fewer items than this record into as few buckets as the
+/// cells allow and count, scan and place on one thread.
+const PARALLEL_ITEMS: usize = 1 << 14;
+
+/// The cells of a run of consecutive items, as pass 1 recorded them: for
+/// each range of cells, one entry per reference falling in it, in item
+/// order, holding the cell's index within the range (high bits) and the
+/// item's position in the run (the low [`POSITION_BITS`]).
 struct RecordedTask {
     /// Position of the run's first item.
     first: usize,
-    /// Every item's cells, one item after the other.
-    cells: Vec<u32>,
-    /// Where each item's cells end in `cells`.
-    ends: Vec<u32>,
+    buckets: Vec<Vec<u32>>,
 }
 
 /// Pass 1 with a record: each item's cells, kept per run of
-/// [`ITEMS_PER_TASK`] items. Stops once the references seen pass `budget`,
-/// so an oversized build fails before its record grows past the budget.
+/// [`ITEMS_PER_TASK`] items and per range of cells. Stops once the
+/// references seen pass `budget`, so an oversized build fails before its
+/// record grows past the budget.
 fn record_cells<V: CellVisitor>(
     len: usize,
     id: &(impl Fn(usize) -> u32 + Sync),
+    ranges: CellRanges,
     budget: u64,
     visitor: &V,
 ) -> Result<Vec<RecordedTask>, ()> {
@@ -357,99 +426,103 @@ fn record_cells<V: CellVisitor>(
         .map(|task| {
             let first = task * ITEMS_PER_TASK;
             let last = (first + ITEMS_PER_TASK).min(len);
-            let mut cells = Vec::new();
-            let mut ends = Vec::with_capacity(last - first);
+            let mut buckets = vec![Vec::new(); ranges.count];
+            let mut recorded = 0u64;
+            // The shift and mask copied out of `ranges`, so that they stay
+            // in registers while the buckets are written
+            // (about 1% of the terrain's one-thread build otherwise).
+            let (shift, mask) = (ranges.shift, ranges.mask());
             for i in first..last {
+                let position = (i - first) as u32;
                 // The caller checked that every cell index fits.
-                visitor.visit(id(i), |c| cells.push(c as u32));
-                let so_far = seen.load(Ordering::Relaxed) + cells.len() as u64;
-                if so_far > budget {
+                visitor.visit(id(i), |c| {
+                    let c = c as u32;
+                    buckets[(c >> shift) as usize].push((c & mask) << POSITION_BITS | position);
+                    recorded += 1;
+                });
+                if seen.load(Ordering::Relaxed) + recorded > budget {
                     return Err(());
                 }
-                // Fits: cells.len() <= budget <= u32::MAX here.
-                ends.push(cells.len() as u32);
             }
-            seen.fetch_add(cells.len() as u64, Ordering::Relaxed);
-            Ok(RecordedTask { first, cells, ends })
+            seen.fetch_add(recorded, Ordering::Relaxed);
+            Ok(RecordedTask { first, buckets })
         })
         .collect()
 }
 
-/// Records shorter than this in all are counted by one task.
-const PARALLEL_COUNT: usize = 1 << 16;
-
-/// Counts and places the recorded references without atomics.
+/// Counts and places the recorded references without atomics, each range
+/// of cells by one task.
 ///
-/// The counts are taken in parallel: the cells are split into one
-/// contiguous range per thread, and each range's task reads the whole record
-/// (a sequential read) and counts the references of its own cells. The
-/// references are then placed by one task, in record order, so each cell
-/// receives its items in order: its list is ascending when the ids are
-/// (`ascending`), and sorted afterwards otherwise. Placing is a scatter bound by first-touch
-/// page faults on the new arrays (the 1M terrain's grid: 8M offsets and 3.4M
-/// references), which the kernel serializes: split over two threads on a
-/// 2-core machine it took longer than in one (148 against 167 ms for the
-/// whole build, medians of 6 rounds), where an atomic increment per
-/// reference had made one thread's build about 1.3x slower.
+/// A range's task reads only its own buckets (in task order, so in item
+/// order), counts its cells, turns the counts into starts from the range's
+/// base (the references of the ranges before it, known from the buckets'
+/// lengths), then places its references into its own part of the
+/// reference array. Each cell therefore receives its items in order: its
+/// list is ascending when the ids are (`ascending`), and sorted afterwards
+/// otherwise.
 fn place_recorded(
     cell_count: usize,
     tasks: &[RecordedTask],
     id: &(impl Fn(usize) -> u32 + Sync),
+    ranges: CellRanges,
     ascending: bool,
     budget: u64,
 ) -> Result<CellLists, BuildError> {
-    let recorded: usize = tasks.iter().map(|t| t.cells.len()).sum();
-    let ranges = if recorded < PARALLEL_COUNT {
-        1
-    } else {
-        rayon::current_num_threads().max(1)
-    };
-    let range_len = cell_count.div_ceil(ranges).max(1);
+    let per_range: Vec<u64> = (0..ranges.count)
+        .map(|r| tasks.iter().map(|t| t.buckets[r].len() as u64).sum())
+        .collect();
+    let total: u64 = per_range.iter().sum();
+    if total > budget {
+        return Err(over_budget(total, budget));
+    }
+    // Fits: total <= budget <= u32::MAX.
+    let bases: Vec<u32> = per_range
+        .iter()
+        .scan(0u64, |running, &n| {
+            let base = *running as u32;
+            *running += n;
+            Some(base)
+        })
+        .collect();
+
+    let mut refs = vec![0u32; total as usize];
+    let mut parts: Vec<&mut [u32]> = Vec::with_capacity(ranges.count);
+    let mut rest = refs.as_mut_slice();
+    for &n in &per_range {
+        let (part, tail) = rest.split_at_mut(n as usize);
+        parts.push(part);
+        rest = tail;
+    }
 
     // offsets[c + 1] counts cell c, then holds its start, then its end.
-    let mut offsets = vec![0u32; cell_count + 1];
+    let mut offsets: Vec<u32> = written_zeros(cell_count + 1);
+    let range_len = ranges.len(cell_count);
     offsets[1..]
         .par_chunks_mut(range_len)
+        .zip(parts)
         .enumerate()
-        .for_each(|(r, counts)| {
-            let lo = r * range_len;
+        .for_each(|(r, (cursors, part))| {
             for task in tasks {
-                for &c in &task.cells {
-                    if let Some(n) = counts.get_mut((c as usize).wrapping_sub(lo)) {
-                        *n += 1;
-                    }
+                for &entry in &task.buckets[r] {
+                    cursors[(entry >> POSITION_BITS) as usize] += 1;
+                }
+            }
+            let mut running = bases[r];
+            for c in cursors.iter_mut() {
+                let count = *c;
+                *c = running;
+                running += count;
+            }
+            for task in tasks {
+                for &entry in &task.buckets[r] {
+                    let item = id(task.first + (entry & POSITION_MASK) as usize);
+                    let at = &mut cursors[(entry >> POSITION_BITS) as usize];
+                    part[(*at - bases[r]) as usize] = item;
+                    *at += 1;
                 }
             }
         });
-    // A serial scan, not `exclusive_prefix_sum`: it touches the offsets'
-    // pages still untouched (empty cells) from one thread, as placing does.
-    let mut running = 0u64;
-    for c in &mut offsets[1..] {
-        let count = u64::from(*c);
-        // Truncation cannot matter: the total is checked below.
-        *c = running as u32;
-        running += count;
-    }
-    if running > budget {
-        return Err(over_budget(running, budget));
-    }
-
-    let mut refs = vec![0u32; running as usize];
-    let cursors = &mut offsets[1..];
-    for task in tasks {
-        let mut start = 0;
-        for (k, &end) in task.ends.iter().enumerate() {
-            let end = end as usize;
-            let item = id(task.first + k);
-            for &c in &task.cells[start..end] {
-                let at = &mut cursors[c as usize];
-                refs[*at as usize] = item;
-                *at += 1;
-            }
-            start = end;
-        }
-    }
-    debug_assert_eq!(offsets[cell_count] as u64, running);
+    debug_assert_eq!(u64::from(offsets[cell_count]), total);
     if !ascending {
         sort_each_cell(&offsets, &mut refs);
     }
@@ -564,8 +637,8 @@ mod tests {
 
     #[test]
     fn ranges_counted_by_several_threads_give_the_same_lists() {
-        // Past PARALLEL_COUNT references, on three threads (three ranges of
-        // cells, the last one shorter), and on one.
+        // Past PARALLEL_ITEMS items, on three threads (four ranges of 256
+        // cells, the last one shorter), and on one (one range).
         let items = 50_000u32;
         let build = |threads| {
             rayon::ThreadPoolBuilder::new()
@@ -575,7 +648,8 @@ mod tests {
                 .install(|| CellLists::build(1013, items, u64::MAX, &WIDE).unwrap())
         };
         let three = build(3);
-        assert!(three.reference_count() >= PARALLEL_COUNT);
+        assert!(items as usize >= PARALLEL_ITEMS);
+        assert_eq!(CellRanges::new(1013, items as usize, 3).count, 4);
         let mut expected = vec![Vec::new(); 1013];
         for i in 0..items {
             WIDE.visit(i, |c| expected[c].push(i));
@@ -584,6 +658,47 @@ mod tests {
             assert_eq!(three.cell(c), want.as_slice(), "cell {c}");
         }
         assert_eq!(build(1), three);
+    }
+
+    #[test]
+    fn cell_ranges_cover_every_cell_with_a_range_per_thread_or_two() {
+        let max_len = 1usize << MAX_SHIFT;
+        for (cells, threads) in [
+            (1013, 3),
+            (8_000_000, 2),
+            (4_300_000, 2),
+            (64, 32),
+            (7, 4),
+            (1 << 20, 1),
+            (10_000_000, 1),
+            (u32::MAX as usize, 2),
+        ] {
+            let r = CellRanges::new(cells, 1 << 20, threads);
+            let len = r.len(cells);
+            assert!(len <= max_len);
+            assert_eq!(
+                r.count,
+                cells.div_ceil(len),
+                "{cells} cells, {threads} threads"
+            );
+            if threads > 1 && cells >= 2 * threads && cells / threads <= max_len {
+                assert!(
+                    (threads..=2 * threads).contains(&r.count),
+                    "{cells} cells: {r:?}"
+                );
+            } else {
+                assert_eq!(r.count, cells.div_ceil(max_len), "{cells} cells: {r:?}");
+            }
+            for c in [0, len - 1, len, cells / 2, cells - 1] {
+                let c = c.min(cells - 1);
+                let (range, within) = (c >> r.shift, c as u32 & r.mask());
+                assert_eq!(range * len + within as usize, c, "cell {c} of {cells}");
+                assert!((within as usize) < len && range < r.count);
+            }
+        }
+        // A small build or one thread: one range while the cells allow.
+        assert_eq!(CellRanges::new(1013, 100, 8).count, 1);
+        assert_eq!(CellRanges::new(max_len, 1 << 20, 1).count, 1);
     }
 
     #[test]
