@@ -30,6 +30,10 @@ pub trait CellVisitor: Sync {
 pub struct CellLists {
     offsets: Vec<u32>,
     refs: Vec<u32>,
+    /// The cells with no reference and the most references in one cell,
+    /// taken when the offsets are made (a large grid's largest array, which
+    /// a pass of its own would read again).
+    occupancy: (usize, usize),
 }
 
 /// Items per parallel task in the two passes.
@@ -108,7 +112,7 @@ impl CellLists {
         }
         offsets.shrink_to_fit();
         refs.shrink_to_fit();
-        Ok(Self { offsets, refs })
+        Ok(Self::with_occupancy(offsets, refs))
     }
 
     /// The two-pass build over items `id(0) .. id(len - 1)`.
@@ -174,7 +178,7 @@ impl CellLists {
         let mut refs: Vec<u32> = refs.into_iter().map(AtomicU32::into_inner).collect();
         debug_assert_eq!(offsets[cell_count] as usize, total);
         sort_each_cell(&offsets, &mut refs);
-        Ok(Self { offsets, refs })
+        Ok(Self::with_occupancy(offsets, refs))
     }
 
     /// Number of cells.
@@ -231,11 +235,16 @@ impl CellLists {
         self.occupancy().1
     }
 
-    /// The cells with no reference and the most references in one cell, in
-    /// one pass over the offsets (a large grid's largest array).
+    /// The cells with no reference and the most references in one cell.
     #[must_use]
     pub fn occupancy(&self) -> (usize, usize) {
-        self.offsets
+        self.occupancy
+    }
+
+    /// Lists of the given arrays, their occupancy taken in one pass over the
+    /// offsets.
+    fn with_occupancy(offsets: Vec<u32>, refs: Vec<u32>) -> Self {
+        let occupancy = offsets
             .par_windows(2)
             .with_min_len(CELLS_PER_CHUNK)
             .fold(
@@ -245,7 +254,12 @@ impl CellLists {
                     (empty + usize::from(len == 0), most.max(len))
                 },
             )
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)))
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+        Self {
+            offsets,
+            refs,
+            occupancy,
+        }
     }
 }
 
@@ -497,21 +511,24 @@ fn place_recorded(
     // offsets[c + 1] counts cell c, then holds its start, then its end.
     let mut offsets: Vec<u32> = written_zeros(cell_count + 1);
     let range_len = ranges.len(cell_count);
-    offsets[1..]
+    let occupancy = offsets[1..]
         .par_chunks_mut(range_len)
         .zip(parts)
         .enumerate()
-        .for_each(|(r, (cursors, part))| {
+        .map(|(r, (cursors, part))| {
             for task in tasks {
                 for &entry in &task.buckets[r] {
                     cursors[(entry >> POSITION_BITS) as usize] += 1;
                 }
             }
             let mut running = bases[r];
+            let (mut empty, mut most) = (0, 0);
             for c in cursors.iter_mut() {
                 let count = *c;
                 *c = running;
                 running += count;
+                empty += usize::from(count == 0);
+                most = most.max(count);
             }
             for task in tasks {
                 for &entry in &task.buckets[r] {
@@ -521,12 +538,18 @@ fn place_recorded(
                     *at += 1;
                 }
             }
-        });
+            (empty, most as usize)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
     debug_assert_eq!(u64::from(offsets[cell_count]), total);
     if !ascending {
         sort_each_cell(&offsets, &mut refs);
     }
-    Ok(CellLists { offsets, refs })
+    Ok(CellLists {
+        offsets,
+        refs,
+        occupancy,
+    })
 }
 
 /// The error of a build that needs `needed` references.
@@ -637,26 +660,33 @@ mod tests {
 
     #[test]
     fn ranges_counted_by_several_threads_give_the_same_lists() {
-        // Past PARALLEL_ITEMS items, on three threads (four ranges of 256
-        // cells, the last one shorter), and on one (one range).
+        // Past PARALLEL_ITEMS items, on three threads (six ranges of 256
+        // cells, the last one shorter), and on one (one range); the cells
+        // past 1013 stay empty.
+        const CELLS: usize = 1500;
         let items = 50_000u32;
         let build = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| CellLists::build(1013, items, u64::MAX, &WIDE).unwrap())
+                .install(|| CellLists::build(CELLS, items, u64::MAX, &WIDE).unwrap())
         };
         let three = build(3);
         assert!(items as usize >= PARALLEL_ITEMS);
-        assert_eq!(CellRanges::new(1013, items as usize, 3).count, 4);
-        let mut expected = vec![Vec::new(); 1013];
+        assert_eq!(CellRanges::new(CELLS, items as usize, 3).count, 6);
+        let mut expected = vec![Vec::new(); CELLS];
         for i in 0..items {
             WIDE.visit(i, |c| expected[c].push(i));
         }
         for (c, want) in expected.iter().enumerate() {
             assert_eq!(three.cell(c), want.as_slice(), "cell {c}");
         }
+        // The occupancy taken range by range, against the lists themselves.
+        let empty = expected.iter().filter(|l| l.is_empty()).count();
+        let most = expected.iter().map(Vec::len).max().unwrap();
+        assert_eq!(three.occupancy(), (empty, most));
+        assert!(empty >= CELLS - 1013);
         assert_eq!(build(1), three);
     }
 
