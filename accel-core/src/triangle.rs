@@ -1149,7 +1149,7 @@ mod tests {
     /// prepared tests agree.
     fn check_box_overlaps<T: Real>(seed: u64, offset: f64, scale: f64) {
         let mut rng = Lcg(seed);
-        let (mut met, mut separated) = (0, 0);
+        let (mut met, mut separated) = ([0; 2], [0; 2]);
         for _ in 0..150 {
             let pt: [Vec3<T>; 3] = [0; 3].map(|_| {
                 v::<f64>(
@@ -1170,6 +1170,22 @@ mod tests {
                 let cell: Aabb<T> = Aabb::new(lo, lo + step).cast();
                 cells.push(cell);
             }
+            // Cells one layer thick along an axis, holding the triangle's
+            // whole extent there (as a grid asks about most of a terrain's
+            // triangles): exactly its bounds on that axis, and wider.
+            for axis in 0..3 {
+                for i in 0..32 {
+                    // The 16 cells of one layer across `axis` (cell `i` of
+                    // the 64 is x + 4y + 16z).
+                    let (m, n) = (i % 4, i / 4 % 4);
+                    let mut cell = cells[[4 * m + 16 * n, m + 16 * n, m + 4 * n][axis]];
+                    let grow = if i < 16 { 0.0 } else { step[axis] * 0.5 };
+                    let (lo, hi) = (tb.min[axis] - grow, tb.max[axis] + grow);
+                    cell.min[axis] = T::from_f64(lo);
+                    cell.max[axis] = T::from_f64(hi);
+                    cells.push(cell);
+                }
+            }
             let mut batch = vec![false; cells.len()];
             triangle_overlaps_boxes(pt, &cells, &mut batch);
             let prepared = TriangleBoxTest::new(pt[0], pt[1], pt[2]);
@@ -1177,26 +1193,28 @@ mod tests {
             // differences are exact and the samples' rounding is tiny.
             let local = exact.map(|q| q - exact[0]);
             let points = samples(local, 60);
-            for (cell, &answer) in cells.iter().zip(&batch) {
+            for (i, (cell, &answer)) in cells.iter().zip(&batch).enumerate() {
                 assert_eq!(answer, triangle_overlaps_box(pt[0], pt[1], pt[2], cell));
                 assert_eq!(answer, prepared.overlaps(cell));
                 let cell64: Aabb<f64> = cell.cast();
                 let cell64 = Aabb::new(cell64.min - exact[0], cell64.max - exact[0]);
+                let layer = usize::from(i >= 64);
                 if points.iter().any(|&q| cell64.contains_point(q)) {
                     assert!(answer, "a cell holding a point of {exact:?} was refused");
-                    met += 1;
+                    met[layer] += 1;
                 }
                 let margin = 1e-4 * scale;
                 if clearly_separated(local, &cell64, margin) {
                     assert!(!answer, "a cell clearly apart from {exact:?} was accepted");
-                    separated += 1;
+                    separated[layer] += 1;
                 }
             }
         }
-        // Both kinds occur often enough for the checks to mean something.
+        // Both kinds occur often enough for the checks to mean something,
+        // among the cells inside the bounds and among the layers.
         assert!(
-            met > 1000 && separated > 1000,
-            "{met} met, {separated} separated"
+            met[0] > 1000 && separated[0] > 1000 && met[1] > 1000 && separated[1] > 500,
+            "{met:?} met, {separated:?} separated"
         );
     }
 

@@ -115,15 +115,26 @@ impl<T: Real> TriangleBoxTest<T> {
         // The box's radius on an axis `a` is `|a|·half`; the rounding bound
         // `slack·|a|·magnitude` joins it in one product.
         let widened = half + magnitude * slack;
-        for (j, (&e, &abs_e)) in self.edges.iter().zip(&self.abs_edges).enumerate() {
-            for k in 0..3 {
-                let c = dot_cross_unit(k, e, centre);
-                let reach = dot_cross_unit_abs(k, abs_e, widened);
-                let (pmin, pmax) = self.projections[3 * j + k];
-                if pmin - c > reach || pmax - c < -reach {
-                    return false;
-                }
-            }
+        // Whether edge axis `unit_k × edge_j` separates.
+        let separates = |j: usize, k: usize| {
+            let c = dot_cross_unit(k, self.edges[j], centre);
+            let reach = dot_cross_unit_abs(k, self.abs_edges[j], widened);
+            let (pmin, pmax) = self.projections[3 * j + k];
+            pmin - c > reach || pmax - c < -reach
+        };
+        if let Some(k) =
+            (0..3).find(|&k| self.bounds.min[k] >= b.min[k] && self.bounds.max[k] <= b.max[k])
+        {
+            // The box holds the triangle's whole extent along axis `k` (a
+            // grid cell one layer thick there, as most of a terrain's are):
+            // they meet exactly where their shadows on a plane across `k`
+            // do. That plane's separating axes are the box's other two
+            // faces, which the bounds have passed, and the triangle's edge
+            // normals in it, `unit_k × edge_j`: three axes, not ten.
+            return !(0..3).any(|j| separates(j, k));
+        }
+        if (0..3).any(|j| (0..3).any(|k| separates(j, k))) {
+            return false;
         }
         // The triangle's plane passes through `origin`: its signed distance
         // from the centre is `−normal · centre`.
