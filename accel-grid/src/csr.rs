@@ -441,27 +441,54 @@ fn record_cells<V: CellVisitor>(
             let first = task * ITEMS_PER_TASK;
             let last = (first + ITEMS_PER_TASK).min(len);
             let mut buckets = vec![Vec::new(); ranges.count];
-            let mut recorded = 0u64;
-            // The shift and mask copied out of `ranges`, so that they stay
-            // in registers while the buckets are written
-            // (about 1% of the terrain's one-thread build otherwise).
-            let (shift, mask) = (ranges.shift, ranges.mask());
-            for i in first..last {
-                let position = (i - first) as u32;
-                // The caller checked that every cell index fits.
-                visitor.visit(id(i), |c| {
-                    let c = c as u32;
+            let recorded = if let [only] = buckets.as_mut_slice() {
+                // One range: a cell is its own index within it, and the
+                // bucket needs no choosing (most of the octree's grids).
+                let mut push = |c, position| only.push(c << POSITION_BITS | position);
+                record_run(first..last, id, visitor, &seen, budget, &mut push)?
+            } else {
+                // The shift and mask copied out of `ranges`, so that they
+                // stay in registers while the buckets are written (about 1%
+                // of the terrain's one-thread build otherwise).
+                let (shift, mask) = (ranges.shift, ranges.mask());
+                let mut push = |c: u32, position| {
                     buckets[(c >> shift) as usize].push((c & mask) << POSITION_BITS | position);
-                    recorded += 1;
-                });
-                if seen.load(Ordering::Relaxed) + recorded > budget {
-                    return Err(());
-                }
-            }
+                };
+                record_run(first..last, id, visitor, &seen, budget, &mut push)?
+            };
             seen.fetch_add(recorded, Ordering::Relaxed);
             Ok(RecordedTask { first, buckets })
         })
         .collect()
+}
+
+/// Records the cells of the items at positions `items` through
+/// `push(cell, position in the run)`, checking after each item that the
+/// references seen by every task stay within `budget`; the references
+/// recorded, or `Err` once past the budget.
+#[inline(always)]
+fn record_run<V: CellVisitor>(
+    items: std::ops::Range<usize>,
+    id: &(impl Fn(usize) -> u32 + Sync),
+    visitor: &V,
+    seen: &AtomicU64,
+    budget: u64,
+    push: &mut impl FnMut(u32, u32),
+) -> Result<u64, ()> {
+    let mut recorded = 0u64;
+    let first = items.start;
+    for i in items {
+        let position = (i - first) as u32;
+        // The caller checked that every cell index fits.
+        visitor.visit(id(i), |c| {
+            push(c as u32, position);
+            recorded += 1;
+        });
+        if seen.load(Ordering::Relaxed) + recorded > budget {
+            return Err(());
+        }
+    }
+    Ok(recorded)
 }
 
 /// Counts and places the recorded references without atomics, each range
