@@ -1213,7 +1213,7 @@ mod tests {
         // Both kinds occur often enough for the checks to mean something,
         // among the cells inside the bounds and among the layers.
         assert!(
-            met[0] > 1000 && separated[0] > 1000 && met[1] > 1000 && separated[1] > 500,
+            met[0] > 1000 && separated[0] > 1000 && met[1] > 1000 && separated[1] > 1000,
             "{met:?} met, {separated:?} separated"
         );
     }

@@ -448,8 +448,9 @@ fn record_cells<V: CellVisitor>(
                 record_run(first..last, id, visitor, &seen, budget, &mut push)?
             } else {
                 // The shift and mask copied out of `ranges`, so that they
-                // stay in registers while the buckets are written (about 1%
-                // of the terrain's one-thread build otherwise).
+                // stay in registers while the buckets are written (12M more
+                // instructions otherwise, about 0.6% of the terrain's
+                // one-thread build).
                 let (shift, mask) = (ranges.shift, ranges.mask());
                 let mut push = |c: u32, position| {
                     buckets[(c >> shift) as usize].push((c & mask) << POSITION_BITS | position);
