@@ -1,6 +1,7 @@
 //! Bounds of a whole primitive set, checked for the builders.
 
-use crate::{Aabb, BuildError, PrimitiveSet, Real};
+use crate::real::{greater, lesser};
+use crate::{Aabb, BuildError, PrimitiveSet, Real, Vec3};
 use rayon::prelude::*;
 
 /// The bounds of every primitive, computed in parallel, and their union.
@@ -19,8 +20,12 @@ pub fn primitive_bounds<T: Real, P: PrimitiveSet<T> + ?Sized>(
         .into_par_iter()
         .map(|i| prims.bounds(i))
         .collect();
-    let total = checked_union(boxes.par_iter().copied().enumerate())?;
-    Ok((boxes, total))
+    let total = boxes
+        .par_chunks(CHUNK)
+        .map(|chunk| chunk.iter().fold(Union::EMPTY, Union::add))
+        .reduce(|| Union::EMPTY, Union::merge);
+    total.checked(|| boxes.iter().position(|b| !b.is_finite()))?;
+    Ok((boxes, total.bounds))
 }
 
 /// The union of every primitive's bounds, checked as [`primitive_bounds`]
@@ -34,12 +39,22 @@ pub fn bounds_union<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
 ) -> Result<Aabb<T>, BuildError> {
     check_count(prims)?;
-    checked_union(
-        (0..prims.len())
-            .into_par_iter()
-            .map(|i| (i, prims.bounds(i))),
-    )
+    let n = prims.len();
+    let total = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            (c * CHUNK..n.min((c + 1) * CHUNK))
+                .map(|i| prims.bounds(i))
+                .fold(Union::EMPTY, |u, b| u.add(&b))
+        })
+        .reduce(|| Union::EMPTY, Union::merge);
+    total.checked(|| (0..n).position(|i| !prims.bounds(i).is_finite()))?;
+    Ok(total.bounds)
 }
+
+/// Primitives per task of the unions: each task folds a run of boxes with
+/// plain selects, and rayon's per-item splitting is paid once per run.
+const CHUNK: usize = 1 << 14;
 
 /// Refuses more primitives than `u32` indices reach.
 fn check_count<T: Real, P: PrimitiveSet<T> + ?Sized>(prims: &P) -> Result<(), BuildError> {
@@ -50,29 +65,128 @@ fn check_count<T: Real, P: PrimitiveSet<T> + ?Sized>(prims: &P) -> Result<(), Bu
     Ok(())
 }
 
-/// The union of indexed boxes, or the lowest index of a non-finite one, in
-/// one pass.
-fn checked_union<T: Real>(
-    boxes: impl ParallelIterator<Item = (usize, Aabb<T>)>,
-) -> Result<Aabb<T>, BuildError> {
-    let (total, first_bad) = boxes
-        .fold(
-            || (Aabb::empty(), usize::MAX),
-            |(total, bad), (i, b)| {
-                let bad = if bad == usize::MAX && !b.is_finite() {
-                    i
-                } else {
-                    bad
-                };
-                (total.union(&b), bad)
-            },
-        )
-        .reduce(
-            || (Aabb::empty(), usize::MAX),
-            |a, b| (a.0.union(&b.0), a.1.min(b.1)),
-        );
-    if first_bad != usize::MAX {
-        return Err(BuildError::NonFinitePrimitive { index: first_bad });
+/// A running union of boxes that also learns, without a branch per box,
+/// whether any was not finite.
+#[derive(Clone, Copy, Debug)]
+struct Union<T> {
+    bounds: Aabb<T>,
+    /// The sum of every corner times zero: zero while each corner is
+    /// finite, NaN for good once one is not (`∞ · 0` and anything with a
+    /// NaN are NaN), which the plain selects of the union would not show.
+    probe: Vec3<T>,
+}
+
+impl<T: Real> Union<T> {
+    const EMPTY: Self = Self {
+        bounds: Aabb::empty(),
+        probe: Vec3::splat(T::ZERO),
+    };
+
+    /// Adds one primitive's box.
+    #[inline]
+    fn add(self, b: &Aabb<T>) -> Self {
+        Self {
+            bounds: selected_union(&self.bounds, b),
+            probe: self.probe + b.min * T::ZERO + b.max * T::ZERO,
+        }
     }
-    Ok(total)
+
+    /// Joins the unions of two runs.
+    fn merge(self, other: Self) -> Self {
+        Self {
+            bounds: selected_union(&self.bounds, &other.bounds),
+            probe: self.probe + other.probe,
+        }
+    }
+
+    /// `Ok` when every box added was finite; else the error naming the
+    /// first bad primitive, which `first_bad` finds (a second pass, taken
+    /// only for a bad scene).
+    fn checked(&self, first_bad: impl FnOnce() -> Option<usize>) -> Result<(), BuildError> {
+        let p = self.probe;
+        if p.x == T::ZERO && p.y == T::ZERO && p.z == T::ZERO {
+            return Ok(());
+        }
+        Err(BuildError::NonFinitePrimitive {
+            index: first_bad().unwrap_or(0),
+        })
+    }
+}
+
+/// [`Aabb::union`] by plain selects, which compile to single min/max
+/// instructions (`f32::min`'s NaN rule costs more); [`Union::probe`]
+/// catches the NaNs they would drop.
+#[inline]
+fn selected_union<T: Real>(a: &Aabb<T>, b: &Aabb<T>) -> Aabb<T> {
+    let (lo, hi) = (a.min, a.max);
+    Aabb {
+        min: Vec3::new(
+            lesser(lo.x, b.min.x),
+            lesser(lo.y, b.min.y),
+            lesser(lo.z, b.min.z),
+        ),
+        max: Vec3::new(
+            greater(hi.x, b.max.x),
+            greater(hi.y, b.max.y),
+            greater(hi.z, b.max.z),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Triangle;
+
+    /// Triangles over several runs of [`CHUNK`], spread over a few binades
+    /// of either sign.
+    fn triangles(n: usize) -> Vec<Triangle<f32>> {
+        (0..n)
+            .map(|i| {
+                let f = |k: usize| {
+                    let h = (i * 3 + k).wrapping_mul(0x9E37_79B9) % 2001;
+                    (h as f32 - 1000.0) * 0.37
+                };
+                let v = |k| Vec3::new(f(k), f(k + 7), f(k + 13));
+                Triangle {
+                    vertices: [v(0), v(1), v(2)],
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_union_is_every_box_joined_one_by_one() {
+        let tris = triangles(3 * CHUNK + 5);
+        let want = (0..tris.len()).fold(Aabb::empty(), |u, i| u.union(&tris.bounds(i)));
+        assert_eq!(bounds_union(tris.as_slice()), Ok(want));
+        let (boxes, total) = primitive_bounds(tris.as_slice()).unwrap();
+        assert_eq!(total, want);
+        assert!((0..tris.len()).all(|i| boxes[i] == tris.bounds(i)));
+        let none: &[Triangle<f32>] = &[];
+        assert_eq!(bounds_union(none), Ok(Aabb::empty()));
+    }
+
+    #[test]
+    fn the_first_non_finite_primitive_is_named_in_whichever_run() {
+        for (bad, value) in [
+            (vec![CHUNK + 3], f32::NAN),
+            (vec![2 * CHUNK + 1, CHUNK + 9], f32::INFINITY),
+            (vec![3 * CHUNK + 4, 0], f32::NEG_INFINITY),
+        ] {
+            let mut tris = triangles(3 * CHUNK + 5);
+            for (j, &i) in bad.iter().enumerate() {
+                tris[i].vertices[j % 3].y = value;
+            }
+            let want = Err(BuildError::NonFinitePrimitive {
+                index: *bad.iter().min().unwrap(),
+            });
+            assert_eq!(
+                bounds_union(tris.as_slice()).map(|_| ()),
+                want,
+                "{bad:?} {value}"
+            );
+            assert_eq!(primitive_bounds(tris.as_slice()).map(|_| ()), want);
+        }
+    }
 }
