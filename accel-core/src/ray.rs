@@ -143,7 +143,25 @@ impl<T: Real> PreparedRay<T> {
     #[inline]
     #[must_use]
     pub fn new(ray: Ray<T>) -> Self {
+        Self::with_reciprocal(ray, Self::reciprocal(ray.direction))
+    }
+
+    /// `1 / d` componentwise, as [`PreparedRay::inv_dir`] holds it.
+    #[inline]
+    #[must_use]
+    pub fn reciprocal(d: Vec3<T>) -> Vec3<T> {
+        Vec3::new(T::ONE / d.x, T::ONE / d.y, T::ONE / d.z)
+    }
+
+    /// [`PreparedRay::new`] for a caller that has already computed
+    /// `inv_dir = PreparedRay::reciprocal(ray.direction)`.
+    #[inline]
+    #[must_use]
+    pub(crate) fn with_reciprocal(ray: Ray<T>, inv_dir: Vec3<T>) -> Self {
         debug_assert!(ray.validate().is_ok());
+        debug_assert!(
+            (0..3).all(|a| inv_dir[a].to_bits_u64() == (T::ONE / ray.direction[a]).to_bits_u64())
+        );
         let d = ray.direction;
         let kz = d.abs().max_dimension();
         let mut kx = (kz + 1) % 3;
@@ -156,7 +174,7 @@ impl<T: Real> PreparedRay<T> {
         let shear = Vec3::new(w[kx] / w[kz], w[ky] / w[kz], 1.0 / w[kz]);
         Self {
             ray,
-            inv_dir: Vec3::new(T::ONE / d.x, T::ONE / d.y, T::ONE / d.z),
+            inv_dir,
             axes: [kx, ky, kz],
             shear,
         }

@@ -59,7 +59,9 @@ impl<T: Real> TraversalRay<T> {
         );
         let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach;
         let t_tol = delta / largest(d.abs()) * (T::ONE + T::gamma(2));
-        let (t0, t1) = bounds.beam_interval(o, d, delta)?;
+        // The reciprocal once, for the slabs here and the walk's planes.
+        let inv_dir = PreparedRay::reciprocal(d);
+        let (t0, t1) = bounds.beam_interval_inv(o, d, inv_dir, delta)?;
         // Finite even for an unbounded interval whose beam entry or exit
         // overflows (a tiny direction): no hit has an infinite parameter, and
         // walks place the beam at `d·t_start`, where 0·∞ would be NaN.
@@ -69,7 +71,7 @@ impl<T: Real> TraversalRay<T> {
             return None;
         }
         Some(Self {
-            prepared: PreparedRay::new(*ray),
+            prepared: PreparedRay::with_reciprocal(*ray, inv_dir),
             delta,
             t_tol,
             t_start,

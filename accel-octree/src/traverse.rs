@@ -3,7 +3,7 @@
 //! A query walks the root grid with `accel-grid`'s [`BeamWalk`], exactly as
 //! the uniform grid does. In a refined cell, the primitives that span it are
 //! tested, and its child grid is walked there and then: from the beam's own
-//! entry into the child's box ([`Aabb::beam_interval`]), no earlier than the
+//! entry into the child's box ([`Aabb::beam_interval_inv`]), no earlier than the
 //! ray's start, under the same stopping rule as every other walk ("the next
 //! cell lies past the best hit plus the hit tolerance"). Each walk therefore
 //! visits every one of its cells that the beam touches before the final best
@@ -65,10 +65,12 @@ fn tolerance_scale<T: Real>(ray: &Ray<T>) -> T {
 #[inline]
 fn child_start<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, limit: T) -> Option<T> {
     let r = tr.ray();
-    let (t0, t1) = node
-        .geometry
-        .bounds()
-        .beam_interval(r.origin, r.direction, tr.delta)?;
+    let (t0, t1) = node.geometry.bounds().beam_interval_inv(
+        r.origin,
+        r.direction,
+        tr.prepared.inv_dir,
+        tr.delta,
+    )?;
     let from = t0.max(tr.t_start);
     (from <= t1 && from <= limit).then_some(from)
 }
