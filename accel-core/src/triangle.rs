@@ -76,14 +76,14 @@ fn watertight<T: Real>(
         sure_sign(ax * cy, ay * cx),
         sure_sign(bx * ay, by * ax),
     );
-    if (su < 0.0 || sv < 0.0 || sw < 0.0) && (su > 0.0 || sv > 0.0 || sw > 0.0) {
+    if opposite_signs(su, sv, sw) {
         return None;
     }
 
     let u = f64::diff_of_products(cx, by, cy, bx);
     let v = f64::diff_of_products(ax, cy, ay, cx);
     let w = f64::diff_of_products(bx, ay, by, ax);
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+    if opposite_signs(u, v, w) {
         return None;
     }
     let det = u + v + w;
@@ -103,6 +103,14 @@ fn watertight<T: Real>(
         u: T::from_f64(v * inv_det),
         v: T::from_f64(w * inv_det),
     })
+}
+
+/// Whether one of `u`, `v`, `w` is below zero and another above: the ray
+/// passes outside an edge. Bitwise, not short-circuit: one branch for the
+/// caller instead of up to six, each on a sign no branch predictor knows.
+#[inline(always)]
+fn opposite_signs(u: f64, v: f64, w: f64) -> bool {
+    ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0))
 }
 
 /// `p − q` for the rounded products `p ≈ a·b`, `q ≈ c·d` when its sign is
