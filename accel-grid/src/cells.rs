@@ -288,7 +288,13 @@ impl<T: Real> GridGeometry<T> {
     /// The cells along `axis` whose closed extent meets `[min, max]`: from
     /// the highest cell whose lower boundary lies below `min` (or the first)
     /// to the highest whose lower boundary is at most `max`. One guess from
-    /// `scale` per end, fixed against the stored boundaries.
+    /// `scale` per end, fixed against the stored boundaries; the caller has
+    /// checked that `[min, max]` meets the grid (`max ≥ b[0]`).
+    ///
+    /// Each fix-up loop tests only what can stop it: the guess is nearly
+    /// always right, so each loop's one test is predictable, where a second
+    /// condition on the span's width (is `lo` below `hi`?) was not. `lo` is
+    /// clamped to `hi` afterwards, the same cell as clamping it first.
     #[inline(always)]
     fn axis_span(&self, axis: usize, scale: T, min: T, max: T) -> (u32, u32) {
         let b = self.boundaries[axis].as_slice();
@@ -296,27 +302,26 @@ impl<T: Real> GridGeometry<T> {
         let first = b[0];
         let guess = |x: T| {
             let g = (x - first) * scale;
-            if g > T::ZERO {
-                g.to_i64_saturating().min(i64::from(last)) as u32
-            } else {
-                0
-            }
+            // A select, not a branch: truncation of `+0` is the first cell.
+            let g = if g > T::ZERO { g } else { T::ZERO };
+            g.to_i64_saturating().min(i64::from(last)) as u32
         };
         let mut hi = guess(max);
-        while hi > 0 && max < b[hi as usize] {
+        // Stops at 0 at the latest, since `max ≥ b[0]`.
+        while max < b[hi as usize] {
             hi -= 1;
         }
         while hi < last && max >= b[hi as usize + 1] {
             hi += 1;
         }
-        let mut lo = guess(min).min(hi);
+        let mut lo = guess(min);
         while lo > 0 && b[lo as usize] >= min {
             lo -= 1;
         }
-        while lo < hi && b[lo as usize + 1] < min {
+        while lo < last && b[lo as usize + 1] < min {
             lo += 1;
         }
-        (lo, hi)
+        (lo.min(hi), hi)
     }
 }
 
