@@ -313,10 +313,15 @@ impl<T: Real> Aabb<T> {
         let lo = (self.min - origin) - Vec3::splat(margin);
         let hi = (self.max - origin) + Vec3::splat(margin);
         let (a, b) = (lo * inv_dir, hi * inv_dir);
-        let near = |a: T, b: T| lesser(a, b);
-        let far = |a: T, b: T| greater(a, b);
-        let t0 = greater(greater(near(a.x, b.x), near(a.y, b.y)), near(a.z, b.z));
-        let t1 = lesser(lesser(far(a.x, b.x), far(a.y, b.y)), far(a.z, b.z));
+        // Each slab's entry is the lesser of its two ends, its exit the greater.
+        let t0 = greater(
+            greater(lesser(a.x, b.x), lesser(a.y, b.y)),
+            lesser(a.z, b.z),
+        );
+        let t1 = lesser(
+            lesser(greater(a.x, b.x), greater(a.y, b.y)),
+            greater(a.z, b.z),
+        );
         widened(t0, t1)
     }
 
