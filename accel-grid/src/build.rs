@@ -138,6 +138,21 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> CellVisitor for PrimitiveCells<'_, T,
 /// dense scene cover a handful of cells, and the largest take several calls.
 const CELL_BATCH: usize = 32;
 
+/// Grids of at least this many cells (offsets of 8 MiB and more) keep a bit
+/// per cell that says whether it holds anything
+/// ([`CellLists::with_occupied_bits`]), and their walks read it before the
+/// offsets.
+///
+/// A walk through a large grid visits mostly empty cells (95% of the 1M
+/// terrain's 8.1M cells are), and each visit read two offsets from an array
+/// too large for the caches: in one pass of the terrain's camera rays, 60%
+/// of the walk's samples waited on that load. The bits are 32 times
+/// smaller; with them the terrain's camera, shadow and diffuse rays trace
+/// about 1.09×, 1.15× and 1.6× as fast. On grids of 0.55M to 0.8M cells
+/// (the 69k bunny, the 100k sphere and soup), whose offsets stay in the
+/// caches, reading the bits first measured no faster.
+pub const OCCUPIED_BITS_MIN_CELLS: usize = 1 << 21;
+
 /// Builds the geometry and cell lists of a grid over `prims`.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
@@ -173,6 +188,11 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         params.max_references,
         &visitor,
     )?;
+    let cells = if geometry.cell_count() >= OCCUPIED_BITS_MIN_CELLS {
+        cells.with_occupied_bits()
+    } else {
+        cells
+    };
     let bytes = cells.bytes()
         + (0..3)
             .map(|a| size_of_val(geometry.boundaries(a)))

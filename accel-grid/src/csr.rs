@@ -34,6 +34,10 @@ pub struct CellLists {
     /// taken when the offsets are made (a large grid's largest array, which
     /// a pass of its own would read again).
     occupancy: (usize, usize),
+    /// A bit per cell, set when the cell holds a reference (cell `c` is bit
+    /// `c % 64` of word `c / 64`), once [`CellLists::with_occupied_bits`]
+    /// has made them; empty before.
+    occupied: Vec<u64>,
 }
 
 /// Items per parallel task in the two passes.
@@ -221,6 +225,41 @@ impl CellLists {
     #[must_use]
     pub fn bytes(&self) -> usize {
         (self.offsets.capacity() + self.refs.capacity()) * size_of::<u32>()
+            + self.occupied.capacity() * size_of::<u64>()
+    }
+
+    /// Whether the lists keep a bit per cell
+    /// ([`CellLists::with_occupied_bits`]).
+    #[inline]
+    #[must_use]
+    pub fn has_occupied_bits(&self) -> bool {
+        !self.occupied.is_empty()
+    }
+
+    /// These lists with a bit per cell that says whether the cell holds
+    /// anything, for [`CellLists::occupied_cell`]: 1/32 of the offsets'
+    /// memory, made in one parallel pass over them.
+    #[must_use]
+    pub fn with_occupied_bits(mut self) -> Self {
+        self.occupied = occupied_bits(&self.offsets);
+        self
+    }
+
+    /// [`CellLists::cell`], reading the cell's occupancy bit first: an empty
+    /// cell is answered without touching the offsets, from an array 32 times
+    /// smaller. Lists without the bits ([`CellLists::has_occupied_bits`])
+    /// take the offsets for every cell.
+    #[inline]
+    #[must_use]
+    pub fn occupied_cell(&self, c: usize) -> &[u32] {
+        // `get` is `None` when the lists keep no bits (or `c` is out of
+        // range, which `cell` then reports).
+        if let Some(word) = self.occupied.get(c / 64)
+            && word >> (c % 64) & 1 == 0
+        {
+            return &[];
+        }
+        self.cell(c)
     }
 
     /// Cells with no reference.
@@ -255,12 +294,69 @@ impl CellLists {
                 },
             )
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+        Self::assembled(offsets, refs, occupancy)
+    }
+
+    /// Lists of the given arrays and occupancy, without occupancy bits.
+    fn assembled(offsets: Vec<u32>, refs: Vec<u32>, occupancy: (usize, usize)) -> Self {
         Self {
             offsets,
             refs,
             occupancy,
+            occupied: Vec::new(),
         }
     }
+}
+
+/// Words of [`CellLists::occupied`] per parallel task.
+const WORDS_PER_CHUNK: usize = 1024;
+
+/// A bit per cell of `offsets` (one more entry than cells), set when the
+/// cell holds a reference.
+fn occupied_bits(offsets: &[u32]) -> Vec<u64> {
+    let cells = offsets.len().saturating_sub(1);
+    let mut words = vec![0u64; cells.div_ceil(64)];
+    words
+        .par_chunks_mut(WORDS_PER_CHUNK)
+        .enumerate()
+        .for_each(|(k, chunk)| {
+            for (w, word) in chunk.iter_mut().enumerate() {
+                let first = (k * WORDS_PER_CHUNK + w) * 64;
+                *word = match offsets.get(first..first + 65) {
+                    Some(window) => word_bits(window.try_into().expect("65 offsets")),
+                    // The last word, of fewer cells.
+                    None => offsets[first..]
+                        .windows(2)
+                        .enumerate()
+                        .fold(0, |bits, (b, pair)| {
+                            bits | u64::from(pair[1] != pair[0]) << b
+                        }),
+                };
+            }
+        });
+    words
+}
+
+/// The occupancy bits of the 64 cells whose offsets are `window` (65
+/// entries): the 64 comparisons as bytes (vector compares), packed eight at
+/// a time by [`pack_bytes`].
+#[inline]
+fn word_bits(window: &[u32; 65]) -> u64 {
+    let held: [u8; 64] = std::array::from_fn(|b| u8::from(window[b + 1] != window[b]));
+    held.chunks_exact(8)
+        .enumerate()
+        .fold(0, |bits, (k, eight)| {
+            bits | pack_bytes(eight.try_into().expect("8 bytes")) << (8 * k)
+        })
+}
+
+/// Eight bytes of 0 or 1 as the bits of one byte (byte `i` to bit `i`): the
+/// product places byte `i` at bit `56 + i` (the terms `i + j = 7` of
+/// `Σ byte_i·2^(8i) · Σ 2^(7j+7)`), lower terms stay below bit 56 without
+/// carrying into it, and higher ones overflow away.
+#[inline]
+fn pack_bytes(eight: [u8; 8]) -> u64 {
+    u64::from_le_bytes(eight).wrapping_mul(0x0102_0408_1020_4080) >> 56
 }
 
 /// Cells per parallel chunk of the build's linear passes over cells.
@@ -573,11 +669,7 @@ fn place_recorded(
     if !ascending {
         sort_each_cell(&offsets, &mut refs);
     }
-    Ok(CellLists {
-        offsets,
-        refs,
-        occupancy,
-    })
+    Ok(CellLists::assembled(offsets, refs, occupancy))
 }
 
 /// The error of a build that needs `needed` references.
@@ -618,6 +710,66 @@ mod tests {
         factor: 3,
         second: 7,
     };
+
+    /// Item `i` belongs to cells `(i · STRIDE) % cells` and, for every
+    /// tenth item, the last cell.
+    struct Sparse {
+        cells: usize,
+    }
+
+    impl Sparse {
+        const STRIDE: usize = 7919;
+    }
+
+    impl CellVisitor for Sparse {
+        fn visit<F: FnMut(usize)>(&self, item: u32, mut cell: F) {
+            let i = item as usize;
+            let a = (i * Self::STRIDE) % self.cells;
+            cell(a);
+            if i.is_multiple_of(10) && a != self.cells - 1 {
+                cell(self.cells - 1);
+            }
+        }
+    }
+
+    #[test]
+    fn pack_bytes_maps_byte_i_to_bit_i() {
+        for v in 0..=255u8 {
+            let bytes = std::array::from_fn(|i| (v >> i) & 1);
+            assert_eq!(pack_bytes(bytes), u64::from(v));
+        }
+    }
+
+    #[test]
+    fn occupied_bits_answer_each_cell_as_its_offsets() {
+        // Not a whole number of 64-cell words, and mostly empty; the last
+        // cell occupied.
+        let cells = 64 * 300 + 37;
+        let visitor = Sparse { cells };
+        let items = 3000u32;
+        let mut expected: std::collections::HashMap<usize, Vec<u32>> =
+            std::collections::HashMap::new();
+        for i in 0..items {
+            visitor.visit(i, |c| expected.entry(c).or_default().push(i));
+        }
+        assert!(expected.contains_key(&(cells - 1)) && expected.len() < cells / 2);
+        let built = CellLists::build(cells, items, u64::MAX, &visitor).unwrap();
+        let assembled = CellLists::from_cells(
+            (0..cells).map(|c| expected.get(&c).cloned().unwrap_or_default()),
+        )
+        .unwrap();
+        for lists in [built, assembled] {
+            assert!(!lists.has_occupied_bits());
+            let with_bits = lists.clone().with_occupied_bits();
+            assert!(with_bits.has_occupied_bits());
+            for c in 0..cells {
+                let want = expected.get(&c).map_or(&[][..], Vec::as_slice);
+                assert_eq!(with_bits.occupied_cell(c), want, "cell {c}");
+                assert_eq!(lists.occupied_cell(c), want, "cell {c} without bits");
+            }
+            assert_eq!(with_bits.bytes(), lists.bytes() + cells.div_ceil(64) * 8);
+        }
+    }
 
     #[test]
     fn lists_match_a_direct_construction() {

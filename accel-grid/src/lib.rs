@@ -9,7 +9,10 @@
 //! built from one parallel pass (rayon) that records each primitive's cells,
 //! which are then counted per cell and placed without atomics. A triangle is
 //! placed only in the cells it truly overlaps (Akenine-Möller's triangle–box
-//! test), not in every cell of its bounding box.
+//! test), not in every cell of its bounding box. A grid too large for the
+//! caches also keeps a bit per cell that says whether it holds anything
+//! ([`build::OCCUPIED_BITS_MIN_CELLS`]), so that its walks pass empty cells
+//! without reading their offsets.
 //!
 //! **Traversal.** A slab test clips the ray to the grid; the walk starts in the
 //! cell holding the origin or the entry point and steps with the 3D-DDA of

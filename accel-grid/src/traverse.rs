@@ -8,27 +8,60 @@ use accel_core::{
 };
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+    /// The references of cell `c`, by its occupancy bit first if `BITS`
+    /// (a large grid's, see [`crate::build::OCCUPIED_BITS_MIN_CELLS`]).
+    #[inline(always)]
+    fn cell<const BITS: bool>(&self, c: usize) -> &[u32] {
+        if BITS {
+            self.cells.occupied_cell(c)
+        } else {
+            self.cells.cell(c)
+        }
+    }
+
     /// Calls `f` with the reference list of every cell a walk step opened.
     #[inline]
-    fn for_step(&self, step: Step, f: impl FnMut(&[u32])) {
+    fn for_step<const BITS: bool>(&self, step: Step, f: impl FnMut(&[u32])) {
         match step {
             Step::Cell(c) => {
                 let mut f = f;
-                f(self.cells.cell(self.geometry.linear_index(c)));
+                f(self.cell::<BITS>(self.geometry.linear_index(c)));
             }
             Step::Cells(b) => {
                 let mut f = f;
                 self.geometry
-                    .for_each_cell_index(&b, |c| f(self.cells.cell(c)));
+                    .for_each_cell_index(&b, |c| f(self.cell::<BITS>(c)));
             }
             Step::End => {}
+        }
+    }
+
+    /// [`Grid::nearest_with`], reading occupancy bits where the grid keeps them.
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        if self.cells.has_occupied_bits() {
+            self.nearest_with::<true, C>(ray, counter)
+        } else {
+            self.nearest_with::<false, C>(ray, counter)
+        }
+    }
+
+    /// [`Grid::any_with`], reading occupancy bits where the grid keeps them.
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+        if self.cells.has_occupied_bits() {
+            self.any_with::<true, C>(ray, counter)
+        } else {
+            self.any_with::<false, C>(ray, counter)
         }
     }
 
     /// The nearest hit: walk front to back, and stop once the beam's front has
     /// passed the best hit by the hit tolerance (a hit found in one cell may
     /// lie beyond it; the seed's termination trap).
-    fn nearest<C: CostCounter>(
+    fn nearest_with<const BITS: bool, C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
@@ -45,7 +78,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
-            self.for_step(cells, |refs| {
+            self.for_step::<BITS>(cells, |refs| {
                 counter.node();
                 for &p in refs {
                     if mailbox.seen(p) {
@@ -70,7 +103,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
     }
 
     /// Any hit: the same walk, returning at the first hit in `[t_min, t_max]`.
-    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+    fn any_with<const BITS: bool, C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<bool, QueryError> {
         ray.validate()?;
         if self.empty {
             return Ok(false);
@@ -83,7 +120,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let mut cells = Step::Cells(first);
         loop {
             let mut found = false;
-            self.for_step(cells, |refs| {
+            self.for_step::<BITS>(cells, |refs| {
                 counter.node();
                 for &p in refs {
                     if found || mailbox.seen(p) {

@@ -201,3 +201,36 @@ proptest! {
         check::<f64>(&scene, &rays, density)?;
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    /// A grid large enough to keep its occupancy bits
+    /// ([`accel_grid::build::OCCUPIED_BITS_MIN_CELLS`]), where the walk reads
+    /// a bit, not the offsets, for every cell, answers as brute force too:
+    /// the closed meshes under a density that gives about twice that many
+    /// cells.
+    #[test]
+    fn large_grid_with_occupied_bits_equals_brute_force(
+        kind in 0u8..2,
+        scale in prop::sample::select(vec![1.0, 0.01, 50.0]),
+        offset in prop::sample::select(vec![0.0, 7.0]),
+        rays in prop::collection::vec((ray_strategy(), window_strategy()), 1..64),
+    ) {
+        let scene = SceneSpec::Mesh(kind, scale, offset);
+        let n = scene.mesh().triangle_count() as f64;
+        let target = 2.0 * accel_grid::build::OCCUPIED_BITS_MIN_CELLS as f64;
+        let density = (target / n).cbrt();
+        // The f32 copy has the same bounds up to rounding, so the same
+        // resolution, far above the threshold either way.
+        let mesh = scene.mesh();
+        let grid = Grid::with_params(&mesh, &GridParams::with_density(density)).unwrap();
+        prop_assert!(
+            grid.cells().has_occupied_bits(),
+            "premise: {} cells",
+            grid.cells().cell_count()
+        );
+        check::<f32>(&scene, &rays, density)?;
+        check::<f64>(&scene, &rays, density)?;
+    }
+}
