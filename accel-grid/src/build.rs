@@ -18,7 +18,8 @@ pub struct GridParams<T> {
     /// primitive also lies in a cell the ray crosses, so treat hits outside it
     /// as unspecified. Default: none (the whole scene).
     pub region: Option<Aabb<T>>,
-    /// The most cells the build may allocate (4 bytes each); more is refused
+    /// The most cells the build may allocate (4 bytes each, and a bit each
+    /// from [`OCCUPIED_BITS_MIN_CELLS`] cells on); more is refused
     /// with [`BuildError::BudgetExceeded`]. Default 2^28 (1 GiB of offsets).
     pub max_cells: u64,
     /// The most primitive references the build may store (4 bytes each).
