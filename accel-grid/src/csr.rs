@@ -308,33 +308,27 @@ impl CellLists {
     }
 }
 
-/// Words of [`CellLists::occupied`] per parallel task.
-const WORDS_PER_CHUNK: usize = 1024;
+/// Words of [`CellLists::occupied`] per parallel task, at least.
+const WORDS_PER_TASK: usize = 1024;
 
 /// A bit per cell of `offsets` (one more entry than cells), set when the
 /// cell holds a reference.
 fn occupied_bits(offsets: &[u32]) -> Vec<u64> {
     let cells = offsets.len().saturating_sub(1);
-    let mut words = vec![0u64; cells.div_ceil(64)];
-    words
-        .par_chunks_mut(WORDS_PER_CHUNK)
-        .enumerate()
-        .for_each(|(k, chunk)| {
-            for (w, word) in chunk.iter_mut().enumerate() {
-                let first = (k * WORDS_PER_CHUNK + w) * 64;
-                *word = match offsets.get(first..first + 65) {
-                    Some(window) => word_bits(window.try_into().expect("65 offsets")),
-                    // The last word, of fewer cells.
-                    None => offsets[first..]
-                        .windows(2)
-                        .enumerate()
-                        .fold(0, |bits, (b, pair)| {
-                            bits | u64::from(pair[1] != pair[0]) << b
-                        }),
-                };
-            }
-        });
-    words
+    (0..cells.div_ceil(64))
+        .into_par_iter()
+        .with_min_len(WORDS_PER_TASK)
+        .map(|w| match offsets.get(64 * w..64 * w + 65) {
+            Some(window) => word_bits(window.try_into().expect("65 offsets")),
+            // The last word, of fewer cells.
+            None => offsets[64 * w..]
+                .windows(2)
+                .enumerate()
+                .fold(0, |bits, (b, pair)| {
+                    bits | u64::from(pair[1] != pair[0]) << b
+                }),
+        })
+        .collect()
 }
 
 /// The occupancy bits of the 64 cells whose offsets are `window` (65

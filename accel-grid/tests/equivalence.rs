@@ -218,12 +218,11 @@ proptest! {
         rays in prop::collection::vec((ray_strategy(), window_strategy()), 1..64),
     ) {
         let scene = SceneSpec::Mesh(kind, scale, offset);
-        let n = scene.mesh().triangle_count() as f64;
+        let mesh = scene.mesh();
         let target = 2.0 * accel_grid::build::OCCUPIED_BITS_MIN_CELLS as f64;
-        let density = (target / n).cbrt();
+        let density = (target / mesh.triangle_count() as f64).cbrt();
         // The f32 copy has the same bounds up to rounding, so the same
         // resolution, far above the threshold either way.
-        let mesh = scene.mesh();
         let grid = Grid::with_params(&mesh, &GridParams::with_density(density)).unwrap();
         prop_assert!(
             grid.cells().has_occupied_bits(),
