@@ -16,7 +16,9 @@
 //! each primitive's bounds on each axis become *events* (start, end, or planar
 //! for a flat extent), sorted once at the root; one linear sweep per axis
 //! finds the cheapest plane; a split partitions the sorted lists stably
-//! instead of sorting again. Splits are *perfect*: a primitive straddling the
+//! instead of sorting again. A cut of empty space hands its lists to the
+//! child that keeps every primitive, with the planes and counts its sweep
+//! recorded, so the child only prices those again for its narrower box. Splits are *perfect*: a primitive straddling the
 //! plane is clipped to each child's box ([`accel_core::PrimitiveSet::clipped_bounds`],
 //! conservative Sutherland–Hodgman-style clipping for triangles) before its
 //! new events are made, so candidate planes hug the geometry inside the node.

@@ -81,6 +81,7 @@ fn choose<T: Real>(sah: &Sah, items: &[Item<T>]) -> Option<Split<T>> {
                     pos: p,
                     planar_left,
                     cost,
+                    kept: None,
                 },
             );
         }

@@ -159,6 +159,7 @@ pub(crate) fn best_binned_split<T: Real>(
                     pos,
                     planar_left: true,
                     cost,
+                    kept: None,
                 });
             }
         }
@@ -296,6 +297,7 @@ impl<T: Real> BinnedNode<T> {
             bounds: self.bounds,
             prims: self.prims,
             events,
+            planes: None,
             depth: self.depth,
         }
     }
@@ -355,6 +357,7 @@ mod tests {
             pos: 1.0,
             planar_left: false,
             cost: 0.0,
+            kept: None,
         };
         let (left, right) = split_binned(node, &split, &mesh);
         // 0 ends at the plane: left. 1 starts there: right. 2 is flat in it:

@@ -16,7 +16,7 @@ use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bou
 use binned::{BinnedNode, best_binned_split, split_binned};
 use depth::Depth;
 use events::{Events, push_axis_events, sort_events};
-use sah::{Sah, Split, best_split};
+use sah::{Sah, Split, best_split, best_split_of_planes};
 use spares::Spares;
 use split::{NodeWork, split_node};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -154,27 +154,36 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
 }
 
 /// The split a node should take, or `None` for a leaf (SAH termination).
+/// A node whose planes are recorded sweeps those; any other records its
+/// planes while it sweeps its events, for a child it may hand them to.
 fn choose<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
-    node: &NodeWork<T>,
+    node: &mut NodeWork<T>,
+    spares: &mut Spares<T>,
 ) -> Option<Split<T>> {
     let n = node.prims.len();
     if ctx.leaf_without_search(node.prims.iter().copied(), node.depth) {
         return None;
     }
     let sah = Sah::new(ctx.params, &node.bounds)?;
-    let best = best_split(&sah, &node.events, n)?;
+    let best = match &node.planes {
+        Some(planes) => best_split_of_planes(&sah, planes, n),
+        None => {
+            let planes = node.planes.insert(spares.planes());
+            best_split(&sah, &node.events, n, planes)
+        }
+    }?;
     (best.cost < sah.leaf_cost(n)).then_some(best)
 }
 
 /// Builds a subtree serially into `out`, reusing the lists of `spares`.
 fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
-    node: NodeWork<T>,
+    mut node: NodeWork<T>,
     out: &mut Out<T>,
     spares: &mut Spares<T>,
 ) {
-    match choose(ctx, &node) {
+    match choose(ctx, &mut node, spares) {
         None => {
             ctx.count_leaf(node.prims.len());
             out.push_leaf(&node.prims);
@@ -193,14 +202,15 @@ fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
 /// Builds a subtree, in parallel while it is large.
 fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
     ctx: &Ctx<'_, T, P>,
-    node: NodeWork<T>,
+    mut node: NodeWork<T>,
 ) -> Piece<T> {
     if node.prims.len() < ctx.params.parallel_threshold.max(2) {
         let mut out = Out::new();
         build_serial(ctx, node, &mut out, &mut Spares::default());
         return Piece::Flat(out);
     }
-    match choose(ctx, &node) {
+    let mut spares = Spares::default();
+    match choose(ctx, &mut node, &mut spares) {
         None => {
             let mut out = Out::new();
             ctx.count_leaf(node.prims.len());
@@ -208,7 +218,7 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
             Piece::Flat(out)
         }
         Some(s) => {
-            let (below, above) = split_node(node, &s, ctx.prims, &mut Spares::default());
+            let (below, above) = split_node(node, &s, ctx.prims, &mut spares);
             let (below, above) =
                 rayon::join(|| build_piece(ctx, below), || build_piece(ctx, above));
             Piece::Inner {
@@ -419,6 +429,7 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds,
             prims: list,
             events,
+            planes: None,
             depth: Depth::ROOT,
         };
         flatten(build_piece(ctx, root), &mut out)?;

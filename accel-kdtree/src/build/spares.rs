@@ -6,6 +6,7 @@
 //! its instructions (callgrind, 200k-triangle terrain).
 
 use super::events::Event;
+use super::sah::{Plane, Planes};
 use super::split::NodeWork;
 
 /// How many spare lists of each kind are kept; more are freed.
@@ -16,6 +17,7 @@ const KEEP: usize = 64;
 pub(crate) struct Spares<T> {
     events: Vec<Vec<Event<T>>>,
     words: Vec<Vec<u32>>,
+    planes: Vec<Vec<Plane<T>>>,
 }
 
 impl<T> Default for Spares<T> {
@@ -23,6 +25,7 @@ impl<T> Default for Spares<T> {
         Self {
             events: Vec::new(),
             words: Vec::new(),
+            planes: Vec::new(),
         }
     }
 }
@@ -38,6 +41,24 @@ impl<T> Spares<T> {
     #[inline]
     pub(crate) fn words(&mut self) -> Vec<u32> {
         self.words.pop().unwrap_or_default()
+    }
+
+    /// Three empty plane lists, recycled where spare.
+    #[inline]
+    pub(crate) fn planes(&mut self) -> Planes<T> {
+        [(); 3].map(|()| self.planes.pop().unwrap_or_default())
+    }
+
+    /// Keeps the plane lists for reuse (emptied), or frees them when enough
+    /// are kept.
+    #[inline]
+    pub(crate) fn give_planes(&mut self, planes: Planes<T>) {
+        for mut list in planes {
+            if list.capacity() > 0 && self.planes.len() < KEEP {
+                list.clear();
+                self.planes.push(list);
+            }
+        }
     }
 
     /// Keeps `list` for reuse (emptied), or frees it when enough are kept.
@@ -63,6 +84,9 @@ impl<T> Spares<T> {
         self.give_words(node.prims);
         for list in node.events {
             self.give_events(list);
+        }
+        if let Some(planes) = node.planes {
+            self.give_planes(planes);
         }
     }
 }

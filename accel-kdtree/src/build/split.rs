@@ -11,23 +11,27 @@
 //! and merged into the child's lists. Nothing is re-sorted: the split is
 //! linear in the node's events plus `s log s` for `s` straddlers. A cut of
 //! empty space, with every primitive on one side, hands the node's lists to
-//! that side as they are (most of a terrain's or a scan's splits: 575,709 of
-//! the 1M-triangle terrain's 727,441 inner nodes have an empty child).
+//! that side as they are, with the planes its sweep recorded (most of a
+//! terrain's or a scan's splits: 575,709 of the 1M-triangle terrain's
+//! 727,441 inner nodes have an empty child); the sweep's counts say that a
+//! split is one, so its events need no classifying.
 
 use super::binned::clip_to_halves;
 use super::depth::Depth;
 use super::events::{END, Event, Events, PLANAR, push_events, sort_events};
-use super::sah::Split;
+use super::sah::{Kept, Planes, Split};
 use super::spares::Spares;
 use accel_core::{Aabb, PrimitiveSet, Real};
 
 /// A node under construction: its box, its primitives (global indices,
-/// ascending) and their events, indexed by position in `prims`.
+/// ascending), their events, indexed by position in `prims`, and the
+/// planes that a sweep of those events recorded, once one has.
 #[derive(Debug)]
 pub(crate) struct NodeWork<T> {
     pub(crate) bounds: Aabb<T>,
     pub(crate) prims: Vec<u32>,
     pub(crate) events: Events<T>,
+    pub(crate) planes: Option<Planes<T>>,
     pub(crate) depth: Depth,
 }
 
@@ -82,27 +86,13 @@ fn partition<T: Real>(
     (list, rights)
 }
 
-/// Splits `node` at `split` into its two children.
-pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
-    node: NodeWork<T>,
-    split: &Split<T>,
-    prims: &P,
-    spares: &mut Spares<T>,
-) -> (NodeWork<T>, NodeWork<T>) {
-    let NodeWork {
-        bounds,
-        prims: list,
-        events,
-        depth,
-    } = node;
-    let (k, p) = (split.axis, split.pos);
-    let n = list.len();
-
-    // One word per primitive: its side in the top two bits, its index in its
-    // child below (one random access per event in the partition).
-    let mut dest = spares.words();
+/// Each primitive's side of `split`, from the events of its axis: one
+/// word per primitive with its side in the top two bits (the index in its
+/// child goes below, later). `dest` is empty on entry.
+fn classify<T: Real>(events: &[Event<T>], split: &Split<T>, n: usize, dest: &mut Vec<u32>) {
+    let p = split.pos;
     dest.resize(n, BOTH << SIDE_SHIFT);
-    for e in &events[k] {
+    for e in events {
         let d = &mut dest[e.local()];
         match e.kind() {
             END => {
@@ -124,13 +114,11 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             }
         }
     }
+}
 
-    let (left_box, right_box) = bounds.split_at(k, p);
-
-    // A cut of empty space (every primitive on one side, so none
-    // straddles) hands the node's lists to that side unchanged: the same
-    // primitives in the same order, so the same local indices, and the same
-    // clipped bounds, since only straddlers are clipped anew.
+/// The child that every primitive goes to, by the sides `dest` gives them;
+/// `None` when both children receive some.
+fn kept_by(dest: &[u32]) -> Option<Kept> {
     let (n_left, n_right) = dest.iter().fold((0, 0), |(l, r), &d| {
         let side = d >> SIDE_SHIFT;
         (
@@ -138,26 +126,81 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             r + usize::from(side == RIGHT),
         )
     });
-    if n_left == n || n_right == n {
+    if n_left == dest.len() {
+        Some(Kept::Below)
+    } else if n_right == dest.len() {
+        Some(Kept::Above)
+    } else {
+        None
+    }
+}
+
+/// Splits `node` at `split` into its two children.
+pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    node: NodeWork<T>,
+    split: &Split<T>,
+    prims: &P,
+    spares: &mut Spares<T>,
+) -> (NodeWork<T>, NodeWork<T>) {
+    let NodeWork {
+        bounds,
+        prims: list,
+        events,
+        planes,
+        depth,
+    } = node;
+    let (k, p) = (split.axis, split.pos);
+    let n = list.len();
+    let (left_box, right_box) = bounds.split_at(k, p);
+
+    // A cut of empty space (every primitive on one side, so none
+    // straddles) hands the node's lists to that side unchanged: the same
+    // primitives in the same order, so the same local indices, and the same
+    // clipped bounds, since only straddlers are clipped anew; and so the
+    // same planes. A split chosen by the sweep says whether it is one; any
+    // other, the primitives' sides say.
+    let mut dest = spares.words();
+    let kept = match split.kept {
+        Some(kept) => {
+            debug_assert!({
+                classify(&events[k], split, n, &mut dest);
+                kept_by(&dest) == Some(kept)
+            });
+            Some(kept)
+        }
+        None => {
+            classify(&events[k], split, n, &mut dest);
+            kept_by(&dest)
+        }
+    };
+    if let Some(kept) = kept {
         spares.give_words(dest);
-        let (below_depth, above_depth) = depth.children(&bounds, k, p, n_left, n_right);
+        let (n_below, n_above) = match kept {
+            Kept::Below => (n, 0),
+            Kept::Above => (0, n),
+        };
+        let (below_depth, above_depth) = depth.children(&bounds, k, p, n_below, n_above);
         let full = |bounds, depth| NodeWork {
             bounds,
             prims: list,
             events,
+            planes,
             depth,
         };
         let empty = |bounds, depth| NodeWork {
             bounds,
             prims: Vec::new(),
             events: Default::default(),
+            planes: None,
             depth,
         };
-        return if n_left == n {
-            (full(left_box, below_depth), empty(right_box, above_depth))
-        } else {
-            (empty(left_box, below_depth), full(right_box, above_depth))
+        return match kept {
+            Kept::Below => (full(left_box, below_depth), empty(right_box, above_depth)),
+            Kept::Above => (empty(left_box, below_depth), full(right_box, above_depth)),
         };
+    }
+    if let Some(planes) = planes {
+        spares.give_planes(planes);
     }
 
     // Renumber; clip the straddlers to each child (perfect splits).
@@ -224,12 +267,14 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds: left_box,
             prims: left_prims,
             events: left_events,
+            planes: None,
             depth: below_depth,
         },
         NodeWork {
             bounds: right_box,
             prims: right_prims,
             events: right_events,
+            planes: None,
             depth: above_depth,
         },
     )
@@ -238,7 +283,9 @@ pub(crate) fn split_node<T: Real, P: PrimitiveSet<T> + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::build::sah::{Sah, best_split, best_split_of_planes, sweep_events};
     use accel_core::{TriangleMesh, Vec3};
+    use proptest::prelude::*;
 
     /// Three triangles in x ∈ [0, 1] of a node spanning x ∈ [0, 4].
     fn node_and_mesh() -> (NodeWork<f64>, TriangleMesh<f64>) {
@@ -263,6 +310,7 @@ mod tests {
             bounds,
             prims: vec![0, 1, 2],
             events,
+            planes: None,
             depth: Depth::ROOT,
         };
         (node, mesh)
@@ -274,6 +322,7 @@ mod tests {
             pos,
             planar_left: true,
             cost: 0.0,
+            kept: None,
         }
     }
 
@@ -319,6 +368,101 @@ mod tests {
                 xs.iter()
                     .all(|e| child.bounds.min.x <= e.pos && e.pos <= child.bounds.max.x)
             );
+        }
+    }
+
+    /// Boxes with corners on a small lattice, so that primitives share
+    /// planes, touch them from either side and lie flat in them, and a
+    /// node box around them that may share their outer planes (face cuts).
+    fn lattice_node() -> impl Strategy<Value = (Vec<Aabb<f32>>, Aabb<f32>)> {
+        let corner = || (0..6u8, 0..6u8, 0..6u8);
+        let boxes = proptest::collection::vec((corner(), corner()), 1..24).prop_map(|pairs| {
+            pairs
+                .into_iter()
+                .map(|((a, b, c), (d, e, f))| {
+                    let p = |x, y, z| Vec3::new(f32::from(x), f32::from(y), f32::from(z));
+                    Aabb::new(p(a, b, c), p(d, e, f))
+                })
+                .collect::<Vec<_>>()
+        });
+        (boxes, 0..2u8, 5..7u8).prop_map(|(boxes, lo, hi)| {
+            let (lo, hi) = (-f32::from(lo), f32::from(hi));
+            (boxes, Aabb::new(Vec3::splat(lo), Vec3::splat(hi)))
+        })
+    }
+
+    /// The sorted events of `boxes`.
+    fn events_of(boxes: &[Aabb<f32>]) -> Events<f32> {
+        let mut events: Events<f32> = Default::default();
+        for (i, b) in boxes.iter().enumerate() {
+            push_events(&mut events, i as u32, b);
+        }
+        for list in &mut events {
+            sort_events(list);
+        }
+        events
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        /// A split chosen by the sweep says it cuts off empty space exactly
+        /// when the primitives' sides, classified from the events as the
+        /// split does, put every one on the same side (empty bonuses up to
+        /// 0.9, so that such cuts are often the cheapest).
+        #[test]
+        fn the_sweep_reports_a_cut_of_empty_space_as_the_sides_do(
+            (boxes, node) in lattice_node(),
+            bonus in 0.0..0.9f64,
+        ) {
+            let params = crate::KdTreeParams { empty_bonus: bonus, ..Default::default() };
+            let sah = Sah::new(&params, &node).expect("a box with area");
+            let events = events_of(&boxes);
+            let n = boxes.len();
+            let mut planes = Vec::new();
+            for (k, list) in events.iter().enumerate() {
+                let Some(split) = sweep_events(&sah, k, list, n, &mut planes) else {
+                    continue;
+                };
+                let mut dest = Vec::new();
+                classify(list, &split, n, &mut dest);
+                prop_assert_eq!(split.kept, kept_by(&dest), "axis {} at {}", k, split.pos);
+            }
+        }
+
+        /// The child of a cut of empty space, given its parent's events and
+        /// planes, chooses from the planes the split that a sweep of the
+        /// events would choose in its box: same plane, side, cost and kept
+        /// child.
+        #[test]
+        fn recorded_planes_price_as_a_sweep_of_the_events(
+            (boxes, node) in lattice_node(),
+            axis in 0..3usize,
+            keep_below in any::<bool>(),
+        ) {
+            let params = crate::KdTreeParams::default();
+            let events = events_of(&boxes);
+            let n = boxes.len();
+            let sah = Sah::new(&params, &node).expect("a box with area");
+            let mut planes: Planes<f32> = Default::default();
+            let parent = best_split(&sah, &events, n, &mut planes);
+            // The child's box: the node cut on `axis` where the primitives
+            // end (or start), so that they all stay in it.
+            let held = boxes.iter().fold(Aabb::empty(), |b, p| b.union(p));
+            let child = if keep_below {
+                node.split_at(axis, held.max[axis]).0
+            } else {
+                node.split_at(axis, held.min[axis]).1
+            };
+            let Some(sah) = Sah::new(&params, &child) else {
+                return Ok(());
+            };
+            let mut fresh: Planes<f32> = Default::default();
+            prop_assert_eq!(
+                best_split_of_planes(&sah, &planes, n),
+                best_split(&sah, &events, n, &mut fresh),
+                "parent's choice {:?}", parent
+            );
+            prop_assert_eq!(&planes, &fresh);
         }
     }
 }
