@@ -89,11 +89,22 @@ impl<T: Real> Out<T> {
         self.nodes.len() - 1
     }
 
+    /// Marks inner node `at` as having no below child (an empty leaf, not
+    /// stored).
+    fn unlink_below(&mut self, at: usize) {
+        self.nodes[at] = self.nodes[at].without_below();
+    }
+
     /// Sets the above child of inner node `at` to the next node appended.
     pub(crate) fn link_above(&mut self, at: usize) {
         let n = self.nodes[at];
         let above = self.nodes.len().min(KdNode::MAX_NODES as usize) as u32;
-        self.nodes[at] = KdNode::inner(n.axis(), n.split_word(), above);
+        let node = KdNode::inner(n.axis(), n.split_word(), above);
+        self.nodes[at] = if n.has_below() {
+            node
+        } else {
+            node.without_below()
+        };
     }
 }
 
@@ -192,9 +203,20 @@ fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
         Some(s) => {
             let at = out.push_inner(s.axis, s.pos);
             let (below, above) = split_node(node, &s, ctx.prims, spares);
-            build_serial(ctx, below, out, spares);
-            out.link_above(at);
-            build_serial(ctx, above, out, spares);
+            // An empty child is a leaf that is not stored: its parent says
+            // so (no below child, or an above index of 0).
+            if below.prims.is_empty() {
+                out.unlink_below(at);
+                spares.recycle(below);
+            } else {
+                build_serial(ctx, below, out, spares);
+            }
+            if above.prims.is_empty() {
+                spares.recycle(above);
+            } else {
+                out.link_above(at);
+                build_serial(ctx, above, out, spares);
+            }
         }
     }
 }
@@ -265,7 +287,46 @@ fn build_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
     }
 }
 
-/// Appends a piece to `out`, relocating its indices.
+impl<T> Piece<T> {
+    /// Whether the piece is a single empty leaf (not stored once joined).
+    fn is_empty_leaf(&self) -> bool {
+        match self {
+            Piece::Flat(o) => {
+                matches!(o.nodes.as_slice(), [n] if n.is_leaf() && n.prim_count() == 0)
+            }
+            Piece::Inner { .. } => false,
+        }
+    }
+
+    /// The nodes, references and split table entries the piece holds.
+    fn sizes(&self) -> [usize; 3] {
+        match self {
+            Piece::Flat(o) => [o.nodes.len(), o.refs.len(), o.splits.len()],
+            Piece::Inner { below, above, .. } => {
+                let (b, a) = (below.sizes(), above.sizes());
+                // The inner node itself, and its split in an `f64` table.
+                [1 + b[0] + a[0], b[1] + a[1], 1 + b[2] + a[2]]
+            }
+        }
+    }
+}
+
+/// Joins the pieces of a tree into `out`, its arrays reserved once (a
+/// flat piece is appended as it is).
+fn join<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError> {
+    if let Piece::Inner { .. } = piece {
+        let [nodes, refs, splits] = piece.sizes();
+        out.nodes.reserve(nodes);
+        out.refs.reserve(refs);
+        if !inline_splits::<T>() {
+            out.splits.reserve(splits);
+        }
+    }
+    flatten(piece, out)
+}
+
+/// Appends a piece to `out`, relocating its indices. The empty leaves among
+/// an inner piece's children are not stored, as in a serial build.
 fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError> {
     match piece {
         Piece::Flat(o) => {
@@ -278,6 +339,11 @@ fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError>
                     needed: total as u64,
                     budget: u64::from(KdNode::MAX_NODES),
                 });
+            }
+            if out.nodes.is_empty() && out.refs.is_empty() && out.splits.is_empty() {
+                // Nothing to relocate by: the piece becomes the output.
+                *out = o;
+                return Ok(());
             }
             let (nb, rb) = (out.nodes.len() as u32, out.refs.len() as u32);
             let sb = (!inline_splits::<T>()).then_some(out.splits.len() as u32);
@@ -293,9 +359,15 @@ fn flatten<T: Real>(piece: Piece<T>, out: &mut Out<T>) -> Result<(), BuildError>
             above,
         } => {
             let at = out.push_inner(axis, pos);
-            flatten(*below, out)?;
-            out.link_above(at);
-            flatten(*above, out)?;
+            if below.is_empty_leaf() {
+                out.unlink_below(at);
+            } else {
+                flatten(*below, out)?;
+            }
+            if !above.is_empty_leaf() {
+                out.link_above(at);
+                flatten(*above, out)?;
+            }
         }
     }
     Ok(())
@@ -414,6 +486,7 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut out = Out::new();
     if naive {
         crate::naive::build_naive(ctx, &list, &boxes, bounds, &mut out);
+        unstored::drop_empty_leaves(&mut out);
     } else if list.len() > ctx.params.binned_above {
         let root = BinnedNode {
             bounds,
@@ -421,7 +494,7 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
             boxes,
             depth: Depth::ROOT,
         };
-        flatten(build_binned(ctx, root), &mut out)?;
+        join(build_binned(ctx, root), &mut out)?;
     } else {
         let events = root_events(&boxes);
         drop(boxes);
@@ -432,9 +505,15 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
             planes: None,
             depth: Depth::ROOT,
         };
-        flatten(build_piece(ctx, root), &mut out)?;
+        join(build_piece(ctx, root), &mut out)?;
     }
-    unstored::drop_empty_leaves(&mut out);
+    debug_assert!(
+        out.nodes
+            .iter()
+            .skip(1)
+            .all(|n| !n.is_leaf() || n.prim_count() > 0),
+        "an empty leaf was stored"
+    );
     Ok(out)
 }
 
