@@ -422,7 +422,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
     }
 
     fn stats(&self) -> AccelStats {
-        self.stats.clone()
+        self.shape_stats().clone()
     }
 }
 

@@ -535,7 +535,8 @@ fn root_events<T: Real>(boxes: &[Aabb<T>]) -> Events<T> {
 /// Shape statistics of a finished tree, by one walk of each part with node
 /// boxes; the SAH cost prices every part against the scene's box `bounds`.
 pub(crate) fn tree_stats<T: Real>(
-    out: &Out<T>,
+    nodes: &[KdNode],
+    splits: &[T],
     parts: &[KdPart<T>],
     bounds: &Aabb<T>,
     params: &KdTreeParams,
@@ -544,10 +545,7 @@ pub(crate) fn tree_stats<T: Real>(
     let mut stats = AccelStats {
         kind: "kdtree",
         primitives,
-        nodes: out.nodes.len(),
-        bytes: out.nodes.capacity() * size_of::<KdNode>()
-            + out.refs.capacity() * size_of::<u32>()
-            + out.splits.capacity() * size_of::<T>(),
+        nodes: nodes.len(),
         ..AccelStats::default()
     };
     let root_area = bounds.half_area().to_f64();
@@ -563,7 +561,7 @@ pub(crate) fn tree_stats<T: Real>(
     let mut stack: Vec<(Option<usize>, Aabb<T>, u32)> =
         parts.iter().map(|p| (Some(p.root), p.bounds, 0)).collect();
     while let Some((i, b, depth)) = stack.pop() {
-        let node = i.map_or(KdNode::leaf(0, 0), |i| out.nodes[i]);
+        let node = i.map_or(KdNode::leaf(0, 0), |i| nodes[i]);
         if node.is_leaf() {
             let count = node.prim_count() as usize;
             stats.leaves += 1;
@@ -575,7 +573,7 @@ pub(crate) fn tree_stats<T: Real>(
             sah_cost += params.intersect_cost * count as f64 * area_ratio(&b);
         } else {
             sah_cost += params.traversal_cost * area_ratio(&b);
-            let (axis, s) = (node.axis(), decode_split(node.split_word(), &out.splits));
+            let (axis, s) = (node.axis(), decode_split(node.split_word(), splits));
             let (lo, hi) = b.split_at(axis, s);
             // An inner node is always stored: `i` is `Some` here.
             let [below, above] = node.children(i.unwrap_or(0));
