@@ -182,11 +182,12 @@ impl AccelConfig {
                 Some("default") => "kdtree".to_owned(),
                 Some(name) => format!("kdtree {name}"),
                 None => format!(
-                    "kdtree ci={} ct={} eb={}{}",
+                    "kdtree ci={} ct={} eb={}{}{}",
                     p.intersect_cost,
                     p.traversal_cost,
                     p.empty_bonus,
-                    binning_label(p)
+                    binning_label(p),
+                    depth_label(p)
                 ),
             },
             Self::Brute => "brute".to_owned(),
@@ -204,6 +205,15 @@ fn binning_label(p: &KdTreeParams) -> String {
         String::new()
     } else {
         format!(" binned>{}/{}", p.binned_above, p.bins)
+    }
+}
+
+/// A kD-tree's depth limit constant when not the default: ` db=D`.
+fn depth_label(p: &KdTreeParams) -> String {
+    if p.depth_base == KdTreeParams::default().depth_base {
+        String::new()
+    } else {
+        format!(" db={}", p.depth_base)
     }
 }
 
@@ -327,11 +337,19 @@ mod tests {
         let binned = KdTreeParams {
             binned_above: 100,
             bins: 16,
-            ..custom
+            ..custom.clone()
         };
         assert_eq!(
             AccelConfig::KdTree(binned).label(),
             "kdtree ci=20 ct=1 eb=0.3 binned>100/16"
+        );
+        let shallower = KdTreeParams {
+            depth_base: 6.0,
+            ..custom
+        };
+        assert_eq!(
+            AccelConfig::KdTree(shallower).label(),
+            "kdtree ci=20 ct=1 eb=0.3 db=6"
         );
         // Out-of-range parameters are refused by the structure, by name.
         let bad = AccelConfig::KdTree(KdTreeParams {
@@ -340,6 +358,12 @@ mod tests {
         });
         let err = build_config(&bad, &mesh).err().unwrap().to_string();
         assert!(err.contains("empty_bonus"), "{err}");
+        let bad = AccelConfig::KdTree(KdTreeParams {
+            depth_base: f64::NAN,
+            ..KdTreeParams::default()
+        });
+        let err = build_config(&bad, &mesh).err().unwrap().to_string();
+        assert!(err.contains("depth_base"), "{err}");
         let err = build_config(&AccelConfig::Grid { density: -1.0 }, &mesh)
             .err()
             .unwrap()

@@ -67,7 +67,7 @@ Examples:
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Measure build time, memory and Mrays/s per accelerator and ray kind.
-    Bench(BenchArgs),
+    Bench(Box<BenchArgs>),
     /// Measure every speed-against-accuracy dial: throughput, build time,
     /// memory, mismatches, leaks and self-intersections per setting.
     Tradeoff(crate::tradeoff::TradeoffArgs),
@@ -271,6 +271,10 @@ pub struct DialArgs {
     /// Bins per axis of the kD-tree's binned SAH (2 to 4096).
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub kdtree_bins: Option<u32>,
+    /// The constant of the kD-tree's depth limit, round(D + 1.3·floor(log2
+    /// n)): 8 is pbrt's (the default), lower builds faster.
+    #[arg(long, value_name = "D", allow_negative_numbers = true)]
+    pub kdtree_depth_base: Option<f64>,
 }
 
 impl DialArgs {
@@ -341,6 +345,11 @@ impl DialArgs {
             "--kdtree-bins",
             AccelKind::KdTree,
         );
+        add(
+            self.kdtree_depth_base.is_some(),
+            "--kdtree-depth-base",
+            AccelKind::KdTree,
+        );
         given
     }
 
@@ -406,6 +415,9 @@ impl DialArgs {
                 }
                 if let Some(k) = self.kdtree_bins {
                     p.bins = k;
+                }
+                if let Some(d) = self.kdtree_depth_base {
+                    p.depth_base = d;
                 }
                 AccelConfig::KdTree(p)
             }
@@ -567,6 +579,8 @@ mod tests {
             "max",
             "--kdtree-bins",
             "16",
+            "--kdtree-depth-base",
+            "5.5",
             "--triangle-test",
             "moller-trumbore",
             "--spawn",
@@ -583,6 +597,7 @@ mod tests {
         };
         assert_eq!((p.intersect_cost, p.empty_bonus), (20.0, 0.5));
         assert_eq!((p.binned_above, p.bins), (usize::MAX, 16));
+        assert_eq!(p.depth_base, 5.5);
         assert!(parse(&["--accel", "kdtree", "--kdtree-binned-above", "lots"]).is_err());
         assert!(
             d.check_structure_options(&[AccelKind::KdTree], false)
