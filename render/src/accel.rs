@@ -81,12 +81,13 @@ impl AccelChoice {
 #[non_exhaustive]
 pub enum AccelError {
     /// The build refused the scene.
-    #[error("building the {kind}: {source}")]
+    #[error("building the {kind}: {cause}")]
     Build {
         /// Which structure.
         kind: AccelKind,
-        /// Why.
-        source: BuildError,
+        /// Why. Named in the message, so not also a `source()`: a report
+        /// of the error's chain (`{:#}`) would say it twice.
+        cause: BuildError,
     },
 }
 
@@ -111,7 +112,7 @@ pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &'a P,
 ) -> Result<Box<dyn Accelerator<T> + 'a>, AccelError> {
     let kind = config.kind();
-    let wrap = |source| AccelError::Build { kind, source };
+    let wrap = |cause| AccelError::Build { kind, cause };
     Ok(match config {
         AccelConfig::Grid { density } => {
             Box::new(Grid::with_params(prims, &GridParams::with_density(*density)).map_err(wrap)?)
@@ -287,12 +288,16 @@ mod tests {
         // A build refusal names the structure.
         let err = AccelError::Build {
             kind: AccelKind::KdTree,
-            source: BuildError::TooManyPrimitives { count: 1 << 33 },
+            cause: BuildError::TooManyPrimitives { count: 1 << 33 },
         };
         assert!(
             err.to_string().starts_with("building the kdtree: "),
             "{err}"
         );
+        // The cause once, also in the chain `render` prints.
+        let cause = BuildError::TooManyPrimitives { count: 1 << 33 }.to_string();
+        let chain = format!("{:#}", anyhow::Error::from(err));
+        assert_eq!(chain.matches(&cause).count(), 1, "{chain}");
     }
 
     #[test]
