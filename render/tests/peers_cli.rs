@@ -80,6 +80,59 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
 }
 
 #[test]
+fn peers_measures_only_the_tools_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = run_fast(
+        dir.path(),
+        &[
+            "peers",
+            "default",
+            "--tools",
+            "octree,obvhs",
+            "--build-rounds",
+            "1",
+            "--json",
+            "p.json",
+        ],
+    );
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("p.json")).unwrap()).unwrap();
+    let built: Vec<&str> = report["builds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["name"].as_str().unwrap())
+        .collect();
+    let expected: &[&str] = if cfg!(feature = "peers") {
+        &["octree", "obvhs"]
+    } else {
+        &["octree"]
+    };
+    assert_eq!(built, expected, "{text}");
+    let sets = report["sets"].as_array().unwrap();
+    assert_eq!(sets.len(), 3 * expected.len(), "{report}");
+    assert!(sets.iter().all(|s| s["reference"] == "octree"), "{report}");
+    // Only the named peers are reported as missing.
+    let missing: Vec<&str> = report["unavailable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|u| u["name"].as_str().unwrap())
+        .collect();
+    let expected_missing: &[&str] = if cfg!(feature = "peers") {
+        &[]
+    } else {
+        &["obvhs"]
+    };
+    assert_eq!(missing, expected_missing, "{text}");
+    // A name that is no tool is refused, naming the choices.
+    let o = run(dir.path(), &["peers", "default", "--tools", "grid,nope"]);
+    assert!(!o.status.success());
+    let err = common::stderr(&o);
+    assert!(err.contains("nope") && err.contains("kdtree"), "{err}");
+}
+
+#[test]
 fn peers_refuses_a_build_round_count_out_of_range() {
     let dir = tempfile::tempdir().unwrap();
     for bad in ["0", "101", "-1", "many"] {

@@ -28,6 +28,7 @@ use crate::output::PendingFile;
 use crate::rayfile;
 use accel_core::{Accelerator, Ray};
 use anyhow::{Context, Result, anyhow};
+use clap::builder::PossibleValuesParser;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::hint::black_box;
@@ -42,6 +43,18 @@ const EXAMPLES: usize = 3;
 
 /// Rays of the sample that estimates a pass's time.
 const PROBE_RAYS: usize = 1000;
+
+/// Every tool `--tools` may name: ours, then the peers in report order.
+pub const TOOL_NAMES: [&str; 8] = [
+    "grid",
+    "octree",
+    "kdtree",
+    "obvhs",
+    "parry3d",
+    "bvh",
+    "embree",
+    "embree-robust",
+];
 
 /// Options of `render peers [SCENE]`.
 #[derive(Clone, Debug, Args)]
@@ -85,6 +98,19 @@ pub struct PeersArgs {
     /// Write the results as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Only these tools, comma-separated (ours: grid, octree, kdtree; the
+    /// peers: obvhs, parry3d, bvh, embree, embree-robust); every one by
+    /// default. The first one measured on a set is the reference of the
+    /// agreement check.
+    #[arg(long, value_name = "TOOLS", value_delimiter = ',', value_parser = PossibleValuesParser::new(TOOL_NAMES))]
+    pub tools: Vec<String>,
+}
+
+impl PeersArgs {
+    /// Whether `--tools` takes the tool `name` (every tool without it).
+    fn wants(&self, name: &str) -> bool {
+        self.tools.is_empty() || self.tools.iter().any(|t| t == name)
+    }
 }
 
 /// A generated ray kind, as `--kinds` names it.
@@ -138,8 +164,8 @@ pub struct SetFigure {
     /// Hits, `t` sum and digest of `(t, triangle)`.
     #[serde(flatten)]
     pub answers: Answers,
-    /// The tool compared with: the first of ours measured on the set
-    /// (the grid unless it was skipped).
+    /// The tool compared with: the first measured on the set, ours first
+    /// (the grid unless it was skipped or left out by `--tools`).
     pub reference: String,
     /// Differences from the reference.
     pub agreement: Agreement,
@@ -303,14 +329,21 @@ struct Built<'a> {
 /// long as its robust mode built next, and with the two swapped the robust
 /// mode was the slow one (the second Embree build matched a standalone C
 /// program's).
-fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<'_>> {
+fn build_all<'m>(
+    mesh: &'m accel_core::TriangleMesh<f32>,
+    rounds: u32,
+    wants: impl Fn(&str) -> bool,
+) -> Result<Built<'m>> {
     let n = mesh.triangle_count();
     let peer_mesh = PeerMesh::new(mesh);
     let mut tools = Vec::new();
     let mut times: Vec<(&'static str, bool, Vec<Duration>)> = Vec::new();
     let mut unavailable = Vec::new();
     let mut failed = Vec::new();
-    let ours = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree];
+    let ours: Vec<AccelKind> = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree]
+        .into_iter()
+        .filter(|k| wants(k.name()))
+        .collect();
     for round in 0..rounds {
         let first = round == 0;
         let mut record = |name: &'static str, is_ours: bool, d: Duration| match times
@@ -320,7 +353,7 @@ fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<
             Some(t) => t.2.push(d),
             None => times.push((name, is_ours, vec![d])),
         };
-        for kind in ours {
+        for &kind in &ours {
             // Every timed build follows an untimed one of the same tool
             // (see the function's comment).
             drop(accel::build_config(&AccelConfig::default_for(kind), mesh)?);
@@ -338,6 +371,9 @@ fn build_all(mesh: &accel_core::TriangleMesh<f32>, rounds: u32) -> Result<Built<
             ..
         } in super::peer_kinds()
         {
+            if !wants(name) {
+                continue;
+            }
             let Some(build) = build else {
                 if first {
                     unavailable.push(Unavailable { name, feature });
@@ -401,7 +437,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         builds,
         unavailable,
         failed,
-    } = build_all(&mesh, args.build_rounds)?;
+    } = build_all(&mesh, args.build_rounds, |name| args.wants(name))?;
     let (sets, source) = match file_rays {
         Some(rays) => (
             vec![RaySet {
@@ -413,18 +449,27 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 .map_or_else(String::new, |p| p.display().to_string()),
         ),
         None => {
-            // Any of ours gives the same primary hits; the kD-tree is never
-            // slow (the grid is, on teapot_in_stadium).
-            let Tool::Ours(_, kdtree) = &tools[2] else {
-                unreachable!("ours are built first")
+            // Any of ours gives the same hits; the kD-tree is never slow
+            // (the grid is, on teapot_in_stadium). One is built for the
+            // rays when `--tools` leaves it out.
+            let measured = tools.iter().find_map(|t| match t {
+                Tool::Ours(AccelKind::KdTree, a) => Some(a.as_ref()),
+                _ => None,
+            });
+            let own;
+            let kdtree = match measured {
+                Some(a) => a,
+                None => {
+                    own = accel::build(AccelKind::KdTree, &mesh)?;
+                    own.as_ref()
+                }
             };
             let wanted: Vec<RayKind> = args.kinds.iter().map(|k| k.kind()).collect();
-            let sets =
-                bench::generate_rays(kdtree.as_ref(), &mesh, &scene.view, args.width, args.height)
-                    .context("generating rays")?
-                    .into_iter()
-                    .filter(|s| wanted.contains(&s.kind))
-                    .collect();
+            let sets = bench::generate_rays(kdtree, &mesh, &scene.view, args.width, args.height)
+                .context("generating rays")?
+                .into_iter()
+                .filter(|s| wanted.contains(&s.kind))
+                .collect();
             (
                 sets,
                 format!("generated from a {}x{} view", args.width, args.height),
@@ -677,4 +722,19 @@ pub fn report_lines(report: &PeersReport) -> Vec<String> {
         out.extend(examples);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tool_names_are_ours_then_every_peer() {
+        let names: Vec<&str> = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree]
+            .iter()
+            .map(|k| k.name())
+            .chain(super::super::peer_kinds().iter().map(|p| p.name))
+            .collect();
+        assert_eq!(names, TOOL_NAMES);
+    }
 }
