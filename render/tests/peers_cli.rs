@@ -16,20 +16,23 @@ fn run_fast(dir: &std::path::Path, args: &[&str]) -> String {
     stdout(&o)
 }
 
+/// `render peers default` with `args` and a tiny view in `dir`: its stdout
+/// and its JSON report.
+fn peers_on_default(dir: &std::path::Path, args: &[&str]) -> (String, Value) {
+    let args: Vec<&str> = ["peers", "default", "--json", "p.json"]
+        .iter()
+        .chain(args)
+        .copied()
+        .collect();
+    let text = run_fast(dir, &args);
+    let report = serde_json::from_slice(&std::fs::read(dir.join("p.json")).unwrap()).unwrap();
+    (text, report)
+}
+
 #[test]
 fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     let dir = tempfile::tempdir().unwrap();
-    let text = run_fast(
-        dir.path(),
-        &[
-            "peers",
-            "default",
-            "--json",
-            "p.json",
-            "--build-rounds",
-            "3",
-        ],
-    );
+    let (text, report) = peers_on_default(dir.path(), &["--build-rounds", "3"]);
     for name in ["grid", "octree", "kdtree"] {
         assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
     }
@@ -42,8 +45,6 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     if !cfg!(feature = "embree") {
         assert!(text.contains("--features embree"), "{text}");
     }
-    let report: Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("p.json")).unwrap()).unwrap();
     assert_eq!(report["scene"], "default");
     let sets = report["sets"].as_array().unwrap();
     assert!(sets.iter().all(|s| s["reference"] == "grid"), "{report}");
@@ -82,43 +83,30 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
 #[test]
 fn peers_measures_only_the_tools_named() {
     let dir = tempfile::tempdir().unwrap();
-    let text = run_fast(
+    let (text, report) = peers_on_default(
         dir.path(),
-        &[
-            "peers",
-            "default",
-            "--tools",
-            "octree,obvhs",
-            "--build-rounds",
-            "1",
-            "--json",
-            "p.json",
-        ],
+        &["--tools", "octree,obvhs", "--build-rounds", "1"],
     );
-    let report: Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("p.json")).unwrap()).unwrap();
-    let built: Vec<&str> = report["builds"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|b| b["name"].as_str().unwrap())
-        .collect();
+    // The "name" of each entry of the report's array `key`.
+    let names = |key: &str| -> Vec<String> {
+        report[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["name"].as_str().unwrap().to_owned())
+            .collect()
+    };
     let expected: &[&str] = if cfg!(feature = "peers") {
         &["octree", "obvhs"]
     } else {
         &["octree"]
     };
-    assert_eq!(built, expected, "{text}");
+    assert_eq!(names("builds"), expected, "{text}");
     let sets = report["sets"].as_array().unwrap();
     assert_eq!(sets.len(), 3 * expected.len(), "{report}");
     assert!(sets.iter().all(|s| s["reference"] == "octree"), "{report}");
     // Only the named peers are reported as missing.
-    let missing: Vec<&str> = report["unavailable"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|u| u["name"].as_str().unwrap())
-        .collect();
+    let missing = names("unavailable");
     let expected_missing: &[&str] = if cfg!(feature = "peers") {
         &[]
     } else {
