@@ -344,12 +344,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 .map_or_else(String::new, |p| p.display().to_string()),
         ),
         None => {
-            // Any accelerator gives the same hits, so the same rays: use
-            // the kD-tree, as `render peers` does, which no scene slows
-            // down much (the grid tests every triangle of a small dense
-            // mesh in a huge box, the teapot in a stadium, per ray: minutes
-            // per set there).
-            let generator = accel::build(AccelKind::KdTree, prims)?;
+            let generator = accel::build(bench::RAY_GENERATOR, prims)?;
             let sets = bench::generate_rays_from(
                 generator.as_ref(),
                 mesh,

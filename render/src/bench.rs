@@ -82,6 +82,12 @@ pub struct RaySet<T> {
     pub rays: Vec<Ray<T>>,
 }
 
+/// The structure that makes generated rays ([`generate_rays`]): any gives
+/// the same hits, so the same rays, and the kD-tree is slow on no scene
+/// (the grid tests every triangle of a small dense mesh in a huge box per
+/// ray: minutes per set on the teapot in a stadium).
+pub const RAY_GENERATOR: AccelKind = AccelKind::KdTree;
+
 /// Generates the primary, shadow and diffuse sets for `view`, using `accel`
 /// for the primary hits (every accelerator gives the same ones), with
 /// secondary rays spawned by the error-bound offset.

@@ -9,7 +9,7 @@
 //! Mrays/s; the plot shows throughput (relative to the scene's best density)
 //! and build time against cells per object.
 
-use crate::accel::{AccelConfig, AccelKind, build_config};
+use crate::accel::{AccelConfig, build_config};
 use crate::app::{check_png_name, load_scene, mesh_in};
 use crate::bench::{self, RaySet};
 use crate::cli::{density_parser, side_parser, threads_parser};
@@ -115,9 +115,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         let scene = load_scene(&name)?;
         let mesh = mesh_in::<f32>(&scene)?;
         let sets = pool.install(|| -> Result<Vec<RaySet<f32>>> {
-            let grid = crate::accel::build(AccelKind::Grid, &mesh)?;
+            let generator = crate::accel::build(bench::RAY_GENERATOR, &mesh)?;
             Ok(bench::generate_rays_from(
-                grid.as_ref(),
+                generator.as_ref(),
                 &mesh,
                 &scene.view,
                 args.width,
@@ -310,6 +310,7 @@ fn panels(rows: &[SweepRow]) -> Vec<Panel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::AccelKind;
     use accel_core::scenes::random_soup;
 
     #[test]

@@ -44,17 +44,16 @@ const EXAMPLES: usize = 3;
 /// Rays of the sample that estimates a pass's time.
 const PROBE_RAYS: usize = 1000;
 
+/// Our accelerators, in report order.
+const OURS: [AccelKind; 3] = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree];
+
 /// Every tool `--tools` may name: ours, then the peers in report order.
-pub const TOOL_NAMES: [&str; 8] = [
-    "grid",
-    "octree",
-    "kdtree",
-    "obvhs",
-    "parry3d",
-    "bvh",
-    "embree",
-    "embree-robust",
-];
+fn tool_names() -> Vec<&'static str> {
+    OURS.iter()
+        .map(|k| k.name())
+        .chain(super::peer_kinds().iter().map(|p| p.name))
+        .collect()
+}
 
 /// Options of `render peers [SCENE]`.
 #[derive(Clone, Debug, Args)]
@@ -102,7 +101,7 @@ pub struct PeersArgs {
     /// peers: obvhs, parry3d, bvh, embree, embree-robust); every one by
     /// default. The first one measured on a set is the reference of the
     /// agreement check.
-    #[arg(long, value_name = "TOOLS", value_delimiter = ',', value_parser = PossibleValuesParser::new(TOOL_NAMES))]
+    #[arg(long, value_name = "TOOLS", value_delimiter = ',', value_parser = PossibleValuesParser::new(tool_names()))]
     pub tools: Vec<String>,
 }
 
@@ -340,10 +339,7 @@ fn build_all<'m>(
     let mut times: Vec<(&'static str, bool, Vec<Duration>)> = Vec::new();
     let mut unavailable = Vec::new();
     let mut failed = Vec::new();
-    let ours: Vec<AccelKind> = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree]
-        .into_iter()
-        .filter(|k| wants(k.name()))
-        .collect();
+    let ours: Vec<AccelKind> = OURS.into_iter().filter(|k| wants(k.name())).collect();
     for round in 0..rounds {
         let first = round == 0;
         let mut record = |name: &'static str, is_ours: bool, d: Duration| match times
@@ -449,23 +445,22 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 .map_or_else(String::new, |p| p.display().to_string()),
         ),
         None => {
-            // Any of ours gives the same hits; the kD-tree is never slow
-            // (the grid is, on teapot_in_stadium). One is built for the
-            // rays when `--tools` leaves it out.
+            // The generator measured here, or one built for the rays when
+            // `--tools` leaves it out.
             let measured = tools.iter().find_map(|t| match t {
-                Tool::Ours(AccelKind::KdTree, a) => Some(a.as_ref()),
+                Tool::Ours(k, a) if *k == bench::RAY_GENERATOR => Some(a.as_ref()),
                 _ => None,
             });
             let own;
-            let kdtree = match measured {
+            let generator = match measured {
                 Some(a) => a,
                 None => {
-                    own = accel::build(AccelKind::KdTree, &mesh)?;
+                    own = accel::build(bench::RAY_GENERATOR, &mesh)?;
                     own.as_ref()
                 }
             };
             let wanted: Vec<RayKind> = args.kinds.iter().map(|k| k.kind()).collect();
-            let sets = bench::generate_rays(kdtree, &mesh, &scene.view, args.width, args.height)
+            let sets = bench::generate_rays(generator, &mesh, &scene.view, args.width, args.height)
                 .context("generating rays")?
                 .into_iter()
                 .filter(|s| wanted.contains(&s.kind))
@@ -729,12 +724,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tool_names_are_ours_then_every_peer() {
-        let names: Vec<&str> = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree]
-            .iter()
-            .map(|k| k.name())
-            .chain(super::super::peer_kinds().iter().map(|p| p.name))
-            .collect();
-        assert_eq!(names, TOOL_NAMES);
+    fn tool_names_are_ours_then_every_peer_once() {
+        let names = tool_names();
+        assert_eq!(&names[..3], ["grid", "octree", "kdtree"]);
+        assert_eq!(names.len(), 3 + super::super::peer_kinds().len());
+        let mut unique = names.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), names.len(), "{names:?}");
     }
 }
