@@ -108,6 +108,34 @@ impl<T: Real> GridGeometry<T> {
         }
     }
 
+    /// The grid of blocks of `2^shift` cells per axis over the same box (the
+    /// last block of an axis may hold fewer): its boundaries are every
+    /// `2^shift`-th of these and the last, the very same values, so a point
+    /// lies in a block exactly when it lies in one of the block's cells.
+    #[must_use]
+    pub fn coarsened(&self, shift: u32) -> Self {
+        let resolution = self.resolution.map(|n| n.div_ceil(1 << shift));
+        let boundaries = core::array::from_fn(|a| {
+            let fine = &self.boundaries[a];
+            let mut b: Vec<T> = fine.iter().step_by(1 << shift).copied().collect();
+            if b.len() == resolution[a] as usize {
+                b.push(fine[fine.len() - 1]);
+            }
+            b
+        });
+        let mut scale = self.scale;
+        for a in 0..3 {
+            scale[a] = scale[a] * T::from_usize(resolution[a] as usize)
+                / T::from_usize(self.resolution[a] as usize);
+        }
+        Self {
+            bounds: self.bounds,
+            resolution,
+            boundaries,
+            scale,
+        }
+    }
+
     /// The box the grid divides.
     #[inline]
     #[must_use]

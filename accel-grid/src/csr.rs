@@ -262,6 +262,25 @@ impl CellLists {
         self.cell(c)
     }
 
+    /// Whether any of the `len` cells from `start` on holds a reference: two
+    /// offsets apart (they never decrease), or a few bits of one or two
+    /// words when the lists keep occupancy bits. `len` is at most 64.
+    #[inline]
+    #[must_use]
+    pub fn any_in_run(&self, start: usize, len: usize) -> bool {
+        debug_assert!(len <= 64 && start + len <= self.cell_count());
+        if self.occupied.is_empty() {
+            return self.offsets[start] != self.offsets[start + len];
+        }
+        let (w, s) = (start / 64, start % 64);
+        let mut bits = self.occupied[w] >> s;
+        if s + len > 64 {
+            bits |= self.occupied[w + 1] << (64 - s);
+        }
+        let mask = if len == 64 { !0 } else { (1u64 << len) - 1 };
+        bits & mask != 0
+    }
+
     /// Cells with no reference.
     #[must_use]
     pub fn empty_cells(&self) -> usize {
@@ -731,6 +750,23 @@ mod tests {
         for v in 0..=255u8 {
             let bytes = std::array::from_fn(|i| (v >> i) & 1);
             assert_eq!(pack_bytes(bytes), u64::from(v));
+        }
+    }
+
+    #[test]
+    fn a_run_holds_something_exactly_when_one_of_its_cells_does() {
+        let cells = 64 * 5 + 21;
+        let visitor = Sparse { cells };
+        let plain = CellLists::build(cells, 30, u64::MAX, &visitor).unwrap();
+        let full = (0..cells).filter(|&c| !plain.cell(c).is_empty()).count();
+        assert!(full > 20 && full < 40, "premise: sparse, {full} cells full");
+        let bits = plain.clone().with_occupied_bits();
+        for start in 0..cells {
+            for len in 1..=64.min(cells - start) {
+                let want = (start..start + len).any(|c| !plain.cell(c).is_empty());
+                assert_eq!(plain.any_in_run(start, len), want, "offsets, {start}+{len}");
+                assert_eq!(bits.any_in_run(start, len), want, "bits, {start}+{len}");
+            }
         }
     }
 

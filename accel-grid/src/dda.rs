@@ -20,6 +20,11 @@
 use crate::cells::{CellBox, GridGeometry};
 use accel_core::{Real, TraversalRay, Vec3};
 
+/// The margin, in units of `gamma(1)` relative to the parameter, that
+/// [`BeamWalk::settled`] keeps from computed crossings: they take about four
+/// roundings (a difference, an offset, a reciprocal and a product).
+pub const SETTLED_MARGIN: u32 = 16;
+
 /// What one step of a [`BeamWalk`] opens.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Step {
@@ -61,6 +66,11 @@ pub struct BeamWalk<'g, T> {
     /// Valid only while the walk is wide; `+∞` on every axis otherwise.
     t_trail: [T; 3],
     thin: bool,
+    /// The parameter of the last lead crossing (`t_start` before the first).
+    t_event: T,
+    /// While thin: when the beam came to lie wholly in the lead cell (its
+    /// trail's last crossing, or `t_start`).
+    t_settled: T,
 }
 
 impl<'g, T: Real> BeamWalk<'g, T> {
@@ -84,6 +94,8 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             t_lead: [T::INFINITY; 3],
             t_trail: [T::INFINITY; 3],
             thin: false,
+            t_event: t_start,
+            t_settled: t_start,
         };
         let mut cells = CellBox::single([0; 3]);
         for a in 0..3 {
@@ -125,6 +137,34 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         self.t_lead[0].min(self.t_lead[1]).min(self.t_lead[2])
     }
 
+    /// The parameter of the crossing that opened the last cells (the start
+    /// parameter before the first step), as computed: within a few roundings
+    /// of the exact one, relative to its magnitude.
+    #[inline]
+    #[must_use]
+    pub fn event_time(&self) -> T {
+        self.t_event
+    }
+
+    /// While the beam lies in one cell (the walk is thin), that cell and a
+    /// parameter at which, exactly, the beam lies in it alone: past the
+    /// moment it settled there and before its next crossing, each by a margin
+    /// of `gamma(SETTLED_MARGIN)` relative to the parameter, which covers the
+    /// rounding of both computed crossings. `None` while the beam spans
+    /// several cells, or when the window is too narrow for the margins (or
+    /// the beam never leaves the cell).
+    #[inline]
+    #[must_use]
+    pub fn settled(&self) -> Option<([u32; 3], T)> {
+        if !self.thin {
+            return None;
+        }
+        let t = self.t_settled + T::gamma(SETTLED_MARGIN) * self.t_settled.abs();
+        let next = self.next_event();
+        // An infinite `next` makes the right side NaN: no window.
+        (t < next - T::gamma(SETTLED_MARGIN) * next.abs()).then_some((self.lead, t))
+    }
+
     /// Moves the front to its next crossing if that happens at or before
     /// `limit`, and returns the cells it opens; `None` ends the walk.
     #[inline]
@@ -155,6 +195,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         if !(t <= limit) || t == T::INFINITY {
             return Step::End;
         }
+        self.t_event = t;
         if !self.thin {
             return self.wide_step(a, t);
         }
@@ -170,6 +211,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         let [t0, t1, t2] = self.t_lead;
         let t01 = if t1 < t0 { t1 } else { t0 };
         let next = if t2 < t01 { t2 } else { t01 };
+        self.t_settled = tau;
         if !(tau <= next) {
             self.trail = self.lead;
             self.trail[a] = old_lead;

@@ -1,5 +1,6 @@
 //! The uniform grid: its parts, and its invariant checker.
 
+use crate::blocks::Blocks;
 use crate::build::{GridParams, build};
 use crate::cells::GridGeometry;
 use crate::csr::CellLists;
@@ -13,6 +14,9 @@ pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     pub(crate) prims: &'a P,
     pub(crate) geometry: GridGeometry<T>,
     pub(crate) cells: CellLists,
+    /// Blocks of cells for skipping empty space ([`crate::blocks`]), on
+    /// grids large enough for them to pay.
+    pub(crate) blocks: Option<Blocks<T>>,
     pub(crate) stats: AccelStats,
     /// True when the grid covers nothing (no primitive was placed).
     pub(crate) empty: bool,
@@ -39,6 +43,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
             empty: built.cells.reference_count() == 0,
             geometry: built.geometry,
             cells: built.cells,
+            blocks: built.blocks,
             stats: built.stats,
         };
         #[cfg(debug_assertions)]
@@ -58,6 +63,13 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     #[must_use]
     pub fn cells(&self) -> &CellLists {
         &self.cells
+    }
+
+    /// The blocks its walks skip empty space with, if it keeps them
+    /// ([`GridParams::skip_empty_blocks`]).
+    #[must_use]
+    pub fn blocks(&self) -> Option<&Blocks<T>> {
+        self.blocks.as_ref()
     }
 
     /// The indexed primitives.
@@ -87,6 +99,9 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
         }
         if let Some(i) = offsets.windows(2).position(|w| w[0] > w[1]) {
             return Err(format!("offsets decrease at cell {i}"));
+        }
+        if let Some(blocks) = &self.blocks {
+            blocks.check(&self.geometry, &self.cells)?;
         }
         let n = self.prims.len();
         for c in 0..self.geometry.cell_count() {

@@ -22,6 +22,13 @@
 //! corners lose nothing. A hit found in a cell may lie beyond it (the seed's
 //! early-termination trap): the walk stops only once it has passed the best
 //! hit. A per-query mailbox (no shared state) tests each primitive once.
+//! A large grid with much empty space also keeps a flag per block of 4×4×4
+//! cells ([`blocks`]): once the beam lies in an empty cell of an empty block,
+//! a second walk over the blocks passes the empty ones a block at a time and
+//! hands back to the cell walk just before the next block that holds
+//! something (macrocells, as in Parker et al. 1998, "Interactive ray tracing
+//! for isosurface rendering"). The answers are the same; the terrain's camera
+//! rays open 6 cells each instead of 41.
 //!
 //! The cell logic ([`cells`], [`dda`], [`csr`], [`resolution`]) is public: the
 //! octree of nested grids is built from it.
@@ -42,6 +49,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod blocks;
 pub mod build;
 pub mod cells;
 pub mod csr;

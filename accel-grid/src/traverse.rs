@@ -36,32 +36,55 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         }
     }
 
+    /// The walk's next cells up to `limit`: past the empty blocks ahead when
+    /// the cells it opened last held nothing and the grid keeps blocks
+    /// ([`crate::blocks`]), else its next step.
+    #[inline(always)]
+    fn next_step<'g, const BLOCKS: bool>(
+        &'g self,
+        walk: &mut BeamWalk<'g, T>,
+        tr: &TraversalRay<T>,
+        limit: T,
+        opened_empty: bool,
+    ) -> Step {
+        if BLOCKS
+            && opened_empty
+            && let Some(blocks) = &self.blocks
+            && let Some(step) = blocks.pass_empty(walk, &self.geometry, tr, limit)
+        {
+            return step;
+        }
+        walk.step(limit)
+    }
+
     /// [`Grid::nearest_with`], reading occupancy bits where the grid keeps them.
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
     ) -> Result<Option<Hit<T>>, QueryError> {
-        if self.cells.has_occupied_bits() {
-            self.nearest_with::<true, C>(ray, counter)
-        } else {
-            self.nearest_with::<false, C>(ray, counter)
+        match (self.cells.has_occupied_bits(), self.blocks.is_some()) {
+            (true, true) => self.nearest_with::<true, true, C>(ray, counter),
+            (true, false) => self.nearest_with::<true, false, C>(ray, counter),
+            (false, true) => self.nearest_with::<false, true, C>(ray, counter),
+            (false, false) => self.nearest_with::<false, false, C>(ray, counter),
         }
     }
 
     /// [`Grid::any_with`], reading occupancy bits where the grid keeps them.
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
-        if self.cells.has_occupied_bits() {
-            self.any_with::<true, C>(ray, counter)
-        } else {
-            self.any_with::<false, C>(ray, counter)
+        match (self.cells.has_occupied_bits(), self.blocks.is_some()) {
+            (true, true) => self.any_with::<true, true, C>(ray, counter),
+            (true, false) => self.any_with::<true, false, C>(ray, counter),
+            (false, true) => self.any_with::<false, true, C>(ray, counter),
+            (false, false) => self.any_with::<false, false, C>(ray, counter),
         }
     }
 
     /// The nearest hit: walk front to back, and stop once the beam's front has
     /// passed the best hit by the hit tolerance (a hit found in one cell may
     /// lie beyond it; the seed's termination trap).
-    fn nearest_with<const BITS: bool, C: CostCounter>(
+    fn nearest_with<const BITS: bool, const BLOCKS: bool, C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
@@ -78,8 +101,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
+            let mut empty = true;
             self.for_step::<BITS>(cells, |refs| {
                 counter.node();
+                if BLOCKS {
+                    empty &= refs.is_empty();
+                }
                 for &p in refs {
                     if mailbox.seen(p) {
                         continue;
@@ -95,7 +122,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                 Some(b) => tr.t_end.min(b.t + tr.t_tol),
                 None => tr.t_end,
             };
-            cells = walk.step(limit);
+            cells = self.next_step::<BLOCKS>(&mut walk, &tr, limit, empty);
             if cells == Step::End {
                 return Ok(best);
             }
@@ -103,7 +130,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
     }
 
     /// Any hit: the same walk, returning at the first hit in `[t_min, t_max]`.
-    fn any_with<const BITS: bool, C: CostCounter>(
+    fn any_with<const BITS: bool, const BLOCKS: bool, C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
@@ -120,8 +147,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let mut cells = Step::Cells(first);
         loop {
             let mut found = false;
+            let mut empty = true;
             self.for_step::<BITS>(cells, |refs| {
                 counter.node();
+                if BLOCKS {
+                    empty &= refs.is_empty();
+                }
                 for &p in refs {
                     if found || mailbox.seen(p) {
                         continue;
@@ -136,7 +167,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
             if found {
                 return Ok(true);
             }
-            cells = walk.step(tr.t_end);
+            cells = self.next_step::<BLOCKS>(&mut walk, &tr, tr.t_end, empty);
             if cells == Step::End {
                 return Ok(false);
             }
