@@ -147,14 +147,14 @@ impl<T: Real> Blocks<T> {
     /// After `walk` (over `geometry`, the cells these blocks group) opened
     /// an empty cell: if its beam has settled in that cell and the cell's
     /// block is empty, passes over the empty blocks ahead (up to `limit`)
-    /// and returns what the cell walk, restarted before the next block that
-    /// holds something, opens first ([`Step::End`] when nothing is left up
-    /// to `limit`). `None` when the walk should simply step on.
+    /// and restarts the cell walk before the next block that holds
+    /// something, returning what it opens first ([`Step::End`] when nothing
+    /// is left up to `limit`). `None` when the walk should simply step on.
     #[inline]
-    pub fn pass_empty<'g>(
-        &'g self,
-        walk: &mut BeamWalk<'g, T>,
-        geometry: &'g GridGeometry<T>,
+    pub fn pass_empty(
+        &self,
+        walk: &mut BeamWalk<'_, T>,
+        geometry: &GridGeometry<T>,
         tr: &TraversalRay<T>,
         limit: T,
     ) -> Option<Step> {
@@ -162,27 +162,24 @@ impl<T: Real> Blocks<T> {
         if !self.is_empty_around(cell) {
             return None;
         }
-        self.pass_from(walk, geometry, tr, from, limit)
+        Some(self.pass_from(walk, geometry, tr, from, limit))
     }
 
     /// [`Blocks::pass_empty`] from parameter `from`, at which the beam lies
-    /// in an empty block.
+    /// in the walk's lead cell alone, in an empty block.
     #[inline(never)]
-    fn pass_from<'g>(
-        &'g self,
-        walk: &mut BeamWalk<'g, T>,
-        geometry: &'g GridGeometry<T>,
+    fn pass_from(
+        &self,
+        walk: &mut BeamWalk<'_, T>,
+        geometry: &GridGeometry<T>,
         tr: &TraversalRay<T>,
         from: T,
         limit: T,
-    ) -> Option<Step> {
-        let (mut blocks, first) = BeamWalk::start(&self.geometry, tr, from);
-        if self.any_occupied(&first) {
-            return None;
-        }
+    ) -> Step {
+        let mut blocks = walk.settled_block(&self.geometry, self.shift, from);
         loop {
             let occupied = match blocks.step(limit) {
-                Step::End => return Some(Step::End),
+                Step::End => return Step::End,
                 Step::Cell(b) => self.occupied[self.geometry.linear_index(b)],
                 Step::Cells(range) => self.any_occupied(&range),
             };
@@ -192,9 +189,7 @@ impl<T: Real> Blocks<T> {
         }
         let t = blocks.event_time();
         let restart = (t - T::gamma(SETTLED_MARGIN) * t.abs()).max(tr.t_start);
-        let (cells, first) = BeamWalk::start(geometry, tr, restart);
-        *walk = cells;
-        Some(Step::Cells(first))
+        Step::Cells(walk.restart(geometry, restart))
     }
 }
 

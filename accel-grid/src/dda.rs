@@ -51,6 +51,8 @@ pub struct BeamWalk<'g, T> {
     origin: Vec3<T>,
     dir: Vec3<T>,
     inv_dir: Vec3<T>,
+    /// The beam's half-width.
+    delta: T,
     /// Per axis, the beam front's offset from a boundary: `−delta` for a
     /// positive direction, `+delta` for a negative one (the trail's is its
     /// negation).
@@ -80,12 +82,13 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     #[inline]
     pub fn start(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>, t_start: T) -> (Self, CellBox) {
         let r = ray.ray();
-        let (origin, dir, delta) = (r.origin, r.direction, ray.delta);
+        let (dir, delta) = (r.direction, ray.delta);
         let mut walk = Self {
             bounds: [geom.boundaries(0), geom.boundaries(1), geom.boundaries(2)],
-            origin,
+            origin: r.origin,
             dir,
             inv_dir: ray.prepared.inv_dir,
+            delta,
             lead_off: [T::ZERO; 3],
             up: [0; 3],
             step: [0; 3],
@@ -97,36 +100,88 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             t_event: t_start,
             t_settled: t_start,
         };
-        let mut cells = CellBox::single([0; 3]);
         for a in 0..3 {
-            let rel = dir[a] * t_start;
-            let low = geom.axis_cell_relative(a, origin[a], rel - delta);
-            let high = geom.axis_cell_relative(a, origin[a], rel + delta);
-            cells.lo[a] = low;
-            cells.hi[a] = high;
-            let d = dir[a];
-            if d > T::ZERO {
+            if dir[a] > T::ZERO {
                 walk.step[a] = 1;
                 walk.up[a] = 1;
                 walk.lead_off[a] = -delta;
-                walk.trail[a] = low;
-                walk.lead[a] = high;
-            } else if d < T::ZERO {
+            } else if dir[a] < T::ZERO {
                 walk.step[a] = -1;
                 walk.lead_off[a] = delta;
-                walk.trail[a] = high;
-                walk.lead[a] = low;
+            }
+        }
+        let cells = walk.restart(geom, t_start);
+        (walk, cells)
+    }
+
+    /// Starts this walk again, in place, at parameter `t` (as
+    /// [`BeamWalk::start`], on the same grid `geom` and ray), and returns the
+    /// cells the beam touches there.
+    #[inline]
+    pub fn restart(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
+        debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
+        self.t_event = t;
+        self.t_settled = t;
+        let mut cells = CellBox::single([0; 3]);
+        for a in 0..3 {
+            let rel = self.dir[a] * t;
+            let low = geom.axis_cell_relative(a, self.origin[a], rel - self.delta);
+            let high = geom.axis_cell_relative(a, self.origin[a], rel + self.delta);
+            cells.lo[a] = low;
+            cells.hi[a] = high;
+            if self.step[a] > 0 {
+                self.trail[a] = low;
+                self.lead[a] = high;
+            } else if self.step[a] < 0 {
+                self.trail[a] = high;
+                self.lead[a] = low;
             } else {
                 // Parallel to the axis: the range never changes.
-                walk.trail[a] = low;
-                walk.lead[a] = high;
+                self.trail[a] = low;
+                self.lead[a] = high;
+                self.t_lead[a] = T::INFINITY;
+                self.t_trail[a] = T::INFINITY;
                 continue;
             }
-            walk.t_lead[a] = walk.lead_time(a);
-            walk.t_trail[a] = walk.trail_time(a);
+            self.t_lead[a] = self.lead_time(a);
+            self.t_trail[a] = self.trail_time(a);
         }
-        walk.thin = walk.trail == walk.lead;
-        (walk, cells)
+        self.thin = self.trail == self.lead;
+        cells
+    }
+
+    /// The walk of the same ray over `blocks`, the grid of blocks of
+    /// `2^shift` cells of this one ([`GridGeometry::coarsened`]), from
+    /// parameter `t` at which, exactly, the beam lies in this walk's lead
+    /// cell alone (one that [`BeamWalk::settled`] returned): it starts in
+    /// that cell's block, as [`BeamWalk::start`] would at `t` without
+    /// locating it again.
+    #[inline]
+    #[must_use]
+    pub fn settled_block(&self, blocks: &'g GridGeometry<T>, shift: u32, t: T) -> Self {
+        debug_assert!(self.thin);
+        let lead = self.lead.map(|c| c >> shift);
+        let mut walk = Self {
+            bounds: [
+                blocks.boundaries(0),
+                blocks.boundaries(1),
+                blocks.boundaries(2),
+            ],
+            lead,
+            trail: lead,
+            t_lead: [T::INFINITY; 3],
+            t_trail: [T::INFINITY; 3],
+            thin: true,
+            t_event: t,
+            t_settled: t,
+            ..*self
+        };
+        for a in 0..3 {
+            if walk.step[a] != 0 {
+                walk.t_lead[a] = walk.lead_time(a);
+            }
+        }
+        walk
     }
 
     /// The parameter of the next lead crossing (`+∞` when the beam's front has
@@ -453,5 +508,75 @@ mod tests {
         // Outside, going away: nothing.
         let r = Ray::new(Vec3::new(5.0, 1.5, 3.5), Vec3::new(1.0, 0.0, 0.0)).unwrap();
         assert!(TraversalRay::new(&r, g.bounds()).is_none());
+    }
+
+    /// Every step of `w` until the end (or 10,000 steps).
+    fn steps(mut w: BeamWalk<'_, f64>) -> Vec<Step> {
+        let mut out = Vec::new();
+        loop {
+            let s = w.step(f64::INFINITY);
+            out.push(s);
+            if s == Step::End || out.len() > 10_000 {
+                return out;
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// A walk started again in place at `t` is the walk started at `t`:
+        /// the same first cells and the same steps after.
+        #[test]
+        fn restarting_in_place_is_starting_afresh(
+            o in proptest::array::uniform3(-1.0..5.0f64),
+            d in proptest::array::uniform3(-1.0..1.0f64),
+            first in 0.0..1.0f64,
+            then in 0.0..1.0f64,
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(4.0, 3.0, 5.0)),
+                [7, 5, 9],
+            );
+            let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
+            let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
+            let at = |u: f64| tr.t_start + u * (tr.t_end - tr.t_start);
+            let (mut moved, _) = BeamWalk::start(&g, &tr, at(first));
+            let _ = moved.step(f64::INFINITY);
+            let again = moved.restart(&g, at(then));
+            let (fresh, cells) = BeamWalk::start(&g, &tr, at(then));
+            proptest::prop_assert_eq!(again, cells);
+            proptest::prop_assert_eq!(steps(moved), steps(fresh));
+        }
+
+        /// The block walk made from a settled cell walk is the walk over the
+        /// blocks started at that parameter, and lies where the cell is.
+        #[test]
+        fn a_settled_walk_hands_over_to_its_block(
+            o in proptest::array::uniform3(-1.0..9.0f64),
+            d in proptest::array::uniform3(-1.0..1.0f64),
+            skip in 0usize..40,
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(8.0, 7.0, 9.0)),
+                [16, 13, 18],
+            );
+            let blocks = g.coarsened(2);
+            let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
+            let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
+            let (mut w, _) = BeamWalk::start(&g, &tr, tr.t_start);
+            for _ in 0..skip {
+                if w.step(f64::INFINITY) == Step::End {
+                    return Ok(());
+                }
+            }
+            let Some((cell, t)) = w.settled() else { return Ok(()) };
+            proptest::prop_assert_eq!(cell, w.lead);
+            // Exactly in the cell alone: a fresh start there opens it only.
+            let (_, here) = BeamWalk::start(&g, &tr, t);
+            proptest::prop_assert_eq!(here, CellBox::single(cell));
+            let handed = w.settled_block(&blocks, 2, t);
+            let (fresh, first) = BeamWalk::start(&blocks, &tr, t);
+            proptest::prop_assert_eq!(first, CellBox::single(cell.map(|c| c >> 2)));
+            proptest::prop_assert_eq!(steps(handed), steps(fresh));
+        }
     }
 }
