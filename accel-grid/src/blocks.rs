@@ -20,8 +20,9 @@
 //! computed crossing `t_e`, the cell walk starts again at
 //! `t_e − gamma(SETTLED_MARGIN)·|t_e|`, at or before the moment, exactly,
 //! that the beam first touched that block or any block opened after it, and
-//! from there visits every cell the beam touches. Cells visited twice are
-//! answered by the mailbox.
+//! from there visits every cell the beam touches. A cell visited twice only
+//! costs time: the mailbox skips most of its primitives, and a primitive
+//! tested again gives the same answer.
 
 use crate::cells::{CellBox, GridGeometry};
 use crate::csr::CellLists;
@@ -42,7 +43,8 @@ pub struct Blocks<T> {
 
 impl<T: Real> Blocks<T> {
     /// The blocks of `2^shift` cells per axis over `geometry`, whose cells
-    /// are `cells`; made in one parallel pass over the offsets.
+    /// are `cells`; made in one parallel pass over runs of cells
+    /// ([`CellLists::any_in_run`]: two offsets, or a few occupancy bits).
     #[must_use]
     pub fn new(geometry: &GridGeometry<T>, cells: &CellLists, shift: u32) -> Self {
         let coarse = geometry.coarsened(shift);
