@@ -165,7 +165,7 @@ pub const OCCUPIED_BITS_MIN_CELLS: usize = 1 << 21;
 
 /// Grids of at least this many cells keep [`Blocks`] for skipping empty
 /// space, when at least [`BLOCKS_MIN_EMPTY_SHARE`] of them are empty.
-pub const BLOCKS_MIN_CELLS: usize = 1 << 15;
+pub const BLOCKS_MIN_CELLS: usize = 1 << 12;
 
 /// The share of empty blocks below which a grid keeps none.
 pub const BLOCKS_MIN_EMPTY_SHARE: f64 = 0.5;
