@@ -57,7 +57,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         walk.step(limit)
     }
 
-    /// [`Grid::nearest_with`], reading occupancy bits where the grid keeps them.
+    /// [`Grid::nearest_with`], reading occupancy bits and skipping empty
+    /// blocks where the grid keeps them.
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
@@ -71,7 +72,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         }
     }
 
-    /// [`Grid::any_with`], reading occupancy bits where the grid keeps them.
+    /// [`Grid::any_with`], reading occupancy bits and skipping empty blocks
+    /// where the grid keeps them.
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
         match (self.cells.has_occupied_bits(), self.blocks.is_some()) {
             (true, true) => self.any_with::<true, true, C>(ray, counter),
