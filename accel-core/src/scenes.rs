@@ -354,7 +354,7 @@ impl GeneratedScene {
                 Vec3::new(0.0, 0.0, 1.0),
                 60.0,
             ),
-            _ => Camera::frame(&self.mesh_bounds(), Vec3::new(1.0, -1.6, 0.9)),
+            _ => Camera::frame(&self.mesh_bounds(), Camera::DEFAULT_SIDE),
         }
     }
 
@@ -402,6 +402,11 @@ impl Camera {
             vfov: vfov_degrees.to_radians(),
         }
     }
+
+    /// The direction from which [`Camera::frame`] shows most scenes: the
+    /// generated ones but the terrain and the teapot in a stadium, and the
+    /// glTF files of the examples and tests.
+    pub const DEFAULT_SIDE: Vec3<f64> = Vec3::new(1.0, -1.6, 0.9);
 
     /// A camera looking at the center of `b` from direction `from` (z up),
     /// far enough that the whole box fits a 45° view.

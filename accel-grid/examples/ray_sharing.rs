@@ -11,11 +11,11 @@
 //! against all its rays would open and test).
 //!
 //! Usage: `ray_sharing [SCENE]`, SCENE a generated scene's name (default
-//! sphere_100k) or a glTF file, which is framed as `ray_costs` frames it;
+//! sphere_100k) or a glTF file, framed from `Camera::DEFAULT_SIDE`;
 //! 512×512 camera rays.
 
 use accel_core::scenes::{Camera, GeneratedScene};
-use accel_core::{Accelerator, Ray, TraversalRay, Vec3, gltf_scene};
+use accel_core::{Accelerator, Ray, TraversalRay, gltf_scene};
 use accel_grid::Grid;
 use accel_grid::dda::{BeamWalk, Step};
 use std::collections::HashSet;
@@ -39,7 +39,7 @@ fn main() {
                 std::process::exit(2);
             })
             .mesh;
-        let camera = Camera::frame(&mesh.bounds(), Vec3::new(1.0, -1.6, 0.9));
+        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE);
         (mesh, camera)
     };
     let mesh = mesh.cast::<f32>().expect("the scene fits f32");
@@ -137,8 +137,8 @@ fn ray_work(grid: &Grid<'_, f32, accel_core::TriangleMesh<f32>>, ray: &Ray<f32>)
     work
 }
 
-/// The mean over `tile`×`tile` tiles of the image of the union of their
-/// rays' cells and triangles: (cells, triangles, tiles).
+/// The unions of each `tile`×`tile` tile's cells and triangles, summed over
+/// the tiles of the image: (cells, triangles, number of tiles).
 fn tile_unions(walks: &[RayWork], tile: u32) -> (f64, f64, f64) {
     let (mut cells, mut triangles, mut tiles) = (0usize, 0usize, 0usize);
     for ty in (0..SIDE).step_by(tile as usize) {

@@ -5,7 +5,7 @@
 //! (`ONLY=kdtree-default` traces one structure, e.g. under callgrind).
 
 use accel_core::scenes::{Camera, GeneratedScene};
-use accel_core::{Accelerator, TraversalCounters, TriangleMesh, Vec3};
+use accel_core::{Accelerator, TraversalCounters, TriangleMesh};
 use accel_grid::Grid;
 use accel_kdtree::{KdTree, KdTreeParams};
 use std::time::Instant;
@@ -77,7 +77,7 @@ fn main() {
                 std::process::exit(2);
             }
         };
-        let camera = Camera::frame(&mesh.bounds(), Vec3::new(1.0, -1.6, 0.9));
+        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE);
         let mesh = mesh.cast::<f32>().expect("fits f32");
         println!("{path}");
         structures(&mesh, &camera.rays::<f32>(256, 256), true);

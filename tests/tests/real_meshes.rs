@@ -7,7 +7,7 @@
 
 use accel_core::gltf_scene::{load, shared_scene_files};
 use accel_core::scenes::{Camera, random_rays};
-use accel_core::{BruteForce, Ray, Real, TriangleMesh, Vec3};
+use accel_core::{BruteForce, Ray, Real, TriangleMesh};
 use accel_tests::Landmarks;
 use accel_tests::assertions::{Expected, check_accelerator};
 use accel_tests::registry::accelerators;
@@ -46,7 +46,7 @@ fn check_mesh<T: Real>(name: &str, mesh: &TriangleMesh<T>) -> Result<String, Str
     let resolved = resolve(mesh, Landmarks::of_mesh(mesh), &specs, &box_specs)?;
     let (mut rays, regions) = (resolved.rays, resolved.regions);
     let b = mesh.bounds().cast::<f64>();
-    let camera = Camera::frame(&b, Vec3::new(1.0, -1.6, 0.9));
+    let camera = Camera::frame(&b, Camera::DEFAULT_SIDE);
     rays.extend(camera.rays::<T>(CAMERA_SIDE, CAMERA_SIDE));
     rays.extend(random_rays::<T>(&b, RANDOM_RAYS, 0x5eed));
 
