@@ -189,6 +189,12 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
         triangle_overlaps_box(p0, p1, p2, b)
     }
 
+    /// The watertight test translates and shears in `f64` from the exact
+    /// `T` inputs ([`intersect_triangle`]).
+    fn wide_hits(&self) -> bool {
+        true
+    }
+
     fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
         triangle_overlaps_boxes(self.triangle(i), boxes, out);
     }

@@ -103,6 +103,83 @@ pub fn partition<T: Real>(boxes: &[Aabb<T>], bounds: &Aabb<T>) -> Vec<Group<T>> 
 /// Boxes per task of the check whether a scene splits.
 const CHUNK: usize = 1 << 14;
 
+/// The fewest primitives lying flat in one plane that [`split_flat`] sets
+/// apart, and the smallest share of the scene (one in `FLAT_SHARE`) they
+/// must be.
+pub const FLAT_MIN: usize = 256;
+/// See [`FLAT_MIN`].
+pub const FLAT_SHARE: usize = 64;
+
+/// The scene of `boxes` as two parts when many primitives lie flat in one
+/// axis-aligned plane (a floor, a wall): the others, then the flat ones,
+/// whose bounds are a box of zero thickness on that axis. `None` when no
+/// plane holds [`FLAT_MIN`] primitives and one in [`FLAT_SHARE`] of them,
+/// or when it holds them all.
+///
+/// A ray that leaves such a surface (a shadow or diffuse ray spawned on it)
+/// then misses the flat part's bounds outright, as it misses a BVH's flat
+/// box, instead of walking down to the leaf it starts in: the beam of
+/// [`crate::TraversalRay::with_wide_hits`] is far thinner than the spawn
+/// offset. A kD-tree's SAH cannot see this (a flat child's surface area is
+/// nearly its parent's), so the build does it before the SAH runs.
+#[must_use]
+pub fn split_flat<T: Real>(boxes: &[Aabb<T>]) -> Option<[Group<T>; 2]> {
+    let n = boxes.len();
+    if n < FLAT_MIN || n / FLAT_SHARE == 0 {
+        return None;
+    }
+    let (axis, plane, count) = (0..3)
+        .filter_map(|axis| {
+            let mut flat: Vec<u64> = boxes
+                .par_iter()
+                .filter(|b| b.min[axis] == b.max[axis])
+                // -0 and +0 are one plane.
+                .map(|b| (b.min[axis] + T::ZERO).to_bits_u64())
+                .collect();
+            if flat.len() < FLAT_MIN {
+                return None;
+            }
+            flat.sort_unstable();
+            let (bits, count) = most_common(&flat);
+            Some((axis, bits, count))
+        })
+        // The most primitives; the lowest axis among equals.
+        .fold(None, |best: Option<(usize, u64, usize)>, c| match best {
+            Some(b) if b.2 >= c.2 => Some(b),
+            _ => Some(c),
+        })?;
+    if count < FLAT_MIN || count < n / FLAT_SHARE || count == n {
+        return None;
+    }
+    let group = |count| Group {
+        prims: Vec::with_capacity(count),
+        bounds: Aabb::empty(),
+    };
+    let (mut rest, mut flat) = (group(n - count), group(count));
+    for (i, b) in boxes.iter().enumerate() {
+        let in_plane = b.min[axis] == b.max[axis] && (b.min[axis] + T::ZERO).to_bits_u64() == plane;
+        let g = if in_plane { &mut flat } else { &mut rest };
+        g.prims.push(i as u32);
+        g.bounds.merge(b);
+    }
+    Some([rest, flat])
+}
+
+/// The value repeated most often in the sorted `values` (the first of
+/// equals), and how often.
+fn most_common(values: &[u64]) -> (u64, usize) {
+    let mut best = (0, 0);
+    let mut i = 0;
+    while i < values.len() {
+        let run = values[i..].iter().take_while(|&&v| v == values[i]).count();
+        if run > best.1 {
+            best = (values[i], run);
+        }
+        i += run;
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -172,6 +249,55 @@ mod tests {
         let last = boxes.len() - 1;
         boxes[last] = cube(40.0, 0.01);
         assert_eq!(parts_of(&boxes).len(), 1);
+    }
+
+    /// A flat quad `[x, x+1] × [y, y+1]` at height `z`.
+    fn tile(x: f64, y: f64, z: f64) -> Aabb<f64> {
+        Aabb::new(Vec3::new(x, y, z), Vec3::new(x + 1.0, y + 1.0, z))
+    }
+
+    #[test]
+    fn a_floor_of_many_flat_primitives_is_set_apart() {
+        // 300 tiles of a floor at z = 0 (one at -0.0), 100 small cubes above
+        // it, and 20 tiles of a shelf at z = 2 (too few to matter).
+        let mut boxes: Vec<Aabb<f64>> = (0..300)
+            .map(|i| tile(f64::from(i % 20), f64::from(i / 20), 0.0))
+            .collect();
+        boxes[7] = tile(7.0, 0.0, -0.0);
+        boxes.extend((0..100).map(|i| cube(f64::from(i) * 0.1, 0.05)));
+        boxes.extend((0..20).map(|i| tile(f64::from(i), 0.0, 2.0)));
+        let [rest, flat] = split_flat(&boxes).expect("the floor is set apart");
+        assert_eq!(flat.prims, (0..300).collect::<Vec<u32>>());
+        assert_eq!(rest.prims, (300..420).collect::<Vec<u32>>());
+        assert_eq!(
+            flat.bounds,
+            Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(20.0, 15.0, 0.0))
+        );
+        assert_eq!(
+            rest.bounds,
+            boxes[300..].iter().fold(Aabb::empty(), |u, b| u.union(b))
+        );
+    }
+
+    #[test]
+    fn few_or_only_flat_primitives_stay_whole() {
+        // Too few in one plane: 255 tiles.
+        let mut boxes: Vec<Aabb<f64>> = (0..255).map(|i| tile(f64::from(i), 0.0, 0.0)).collect();
+        boxes.extend((0..100).map(|i| cube(f64::from(i), 0.5)));
+        assert!(split_flat(&boxes).is_none());
+        // Too small a share: 300 tiles among 30,000 cubes.
+        let mut boxes: Vec<Aabb<f64>> = (0..300).map(|i| tile(f64::from(i), 0.0, 0.0)).collect();
+        boxes.extend((0..30_000).map(|i| cube(f64::from(i), 0.5)));
+        assert!(split_flat(&boxes).is_none());
+        // Everything in the plane: nothing to set apart from.
+        let boxes: Vec<Aabb<f64>> = (0..300).map(|i| tile(f64::from(i), 0.0, 0.0)).collect();
+        assert!(split_flat(&boxes).is_none());
+        // Flat, but in 300 different planes.
+        let boxes: Vec<Aabb<f64>> = (0..300)
+            .map(|i| tile(0.0, 0.0, f64::from(i)))
+            .chain((0..10).map(|i| cube(f64::from(i), 0.5)))
+            .collect();
+        assert!(split_flat(&boxes).is_none());
     }
 
     #[test]

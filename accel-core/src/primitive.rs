@@ -30,6 +30,11 @@ pub trait Primitive<T: Real>: Sync {
     /// The hit of `ray` with `ray.t_min ≤ t ≤ t_max`, if any.
     fn intersect(&self, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>>;
 
+    /// Whether every hit is accurate to the rounding of [`Real::Wide`], as
+    /// [`PrimitiveSet::wide_hits`] says; `false` (always safe) unless the
+    /// test computes in the wide type from `T`'s exact inputs.
+    const WIDE_HITS: bool = false;
+
     /// Whether the primitive meets the closed box `b`. The default tests the
     /// bounds; shapes with an exact test override it, so that long thin shapes
     /// are referenced only by the cells they really touch.
@@ -93,6 +98,19 @@ pub trait PrimitiveSet<T: Real>: Sync {
     /// Whether primitive `i` meets the closed box `b` (conservatively).
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool;
 
+    /// Whether every hit is accurate to the rounding of [`Real::Wide`], not
+    /// only of `T`: the reported point `o + t·d`, before `t` is rounded to
+    /// `T`, lies within `gamma(16)·(max |p − o|)` **of `T::Wide`** of the
+    /// primitive. A test that computes in `T::Wide` from `T`'s exact
+    /// inputs (the watertight triangle test) is; one that rounds in `T`
+    /// first is not. A traversal may then use a beam as thin as the wide
+    /// type's rounding ([`crate::TraversalRay::with_wide_hits`]), which lets
+    /// a ray that leaves a surface skip it. The default, `false`, is always
+    /// safe.
+    fn wide_hits(&self) -> bool {
+        false
+    }
+
     /// [`PrimitiveSet::overlaps_box`] of primitive `i` for each of `boxes`,
     /// written to the same place in `out` (as long as `boxes`), as
     /// [`Primitive::overlaps_boxes`]: one call per primitive lets a set
@@ -128,6 +146,10 @@ pub trait PrimitiveSet<T: Real>: Sync {
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
     #[inline]
+    fn wide_hits(&self) -> bool {
+        P::WIDE_HITS
+    }
+    #[inline]
     fn len(&self) -> usize {
         <[P]>::len(self)
     }
@@ -158,6 +180,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
 }
 
 impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
+    #[inline]
+    fn wide_hits(&self) -> bool {
+        P::WIDE_HITS
+    }
     #[inline]
     fn len(&self) -> usize {
         Vec::len(self)

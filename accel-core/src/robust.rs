@@ -50,23 +50,65 @@ impl<T: Real> TraversalRay<T> {
         }
         let o = ray.origin;
         let d = ray.direction;
-        // Plain selects (no NaN here: the ray is finite, the bounds too, and
-        // their differences at worst infinite).
-        let largest = |v: Vec3<T>| greater(greater(v.x, v.y), v.z);
-        let reach = greater(
-            largest((bounds.min - o).abs()),
-            largest((bounds.max - o).abs()),
-        );
-        let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach;
-        let t_tol = delta / largest(d.abs()) * (T::ONE + T::gamma(2));
+        let delta = T::gamma(TRAVERSAL_ROUNDINGS) * reach(bounds, o);
         // The reciprocal once, for the slabs here and the walk's planes.
         let inv_dir = PreparedRay::reciprocal(d);
         let (t0, t1) = bounds.beam_interval_inv(o, d, inv_dir, delta)?;
-        // Finite even for an unbounded interval whose beam entry or exit
-        // overflows (a tiny direction): no hit has an infinite parameter, and
-        // walks place the beam at `d·t_start`, where 0·∞ would be NaN.
-        let t_start = t0.max(ray.t_min - t_tol).max(-T::MAX);
-        let t_end = t1.min(ray.t_max + t_tol).min(T::MAX);
+        Self::clipped(ray, inv_dir, delta, t0, t1)
+    }
+
+    /// [`TraversalRay::new`] for primitives whose hits are accurate to the
+    /// rounding of [`Real::Wide`] ([`crate::PrimitiveSet::wide_hits`]): the
+    /// beam is `gamma(64)` **of the wide type** of the farthest corner, about
+    /// 5·10⁸ times thinner than `new`'s in `f32`, so that a ray leaving a
+    /// surface need not walk the surface's nodes. The bounds are entered in
+    /// the wide type, where that width is not lost in the rounding of `T`.
+    ///
+    /// Only a walk whose own crossings allow for their rounding relative to
+    /// the parameters (a kD-tree's plane bands) may use this beam: a cell
+    /// walk's crossings round in `T` and need `new`'s. In `f64`, where the
+    /// wide type is `T`, the two beams are the same.
+    #[inline]
+    #[must_use]
+    pub fn with_wide_hits(ray: &Ray<T>, bounds: &Aabb<T>) -> Option<Self> {
+        if ray.is_empty_interval() || bounds.is_empty() {
+            return None;
+        }
+        let wide = |v: Vec3<T>| v.map(T::to_wide);
+        let (o, d) = (wide(ray.origin), wide(ray.direction));
+        let b = Aabb {
+            min: wide(bounds.min),
+            max: wide(bounds.max),
+        };
+        let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
+        let (t0, t1) = b.beam_interval_inv(o, d, PreparedRay::reciprocal(d), delta)?;
+        // Rounded outward to `T`: the beam only grows.
+        Self::clipped(
+            ray,
+            PreparedRay::reciprocal(ray.direction),
+            T::from_wide(delta).next_up(),
+            T::from_wide(t0).next_down(),
+            T::from_wide(t1).next_up(),
+        )
+    }
+
+    /// The beam of half-width `delta` whose entry into and exit from the
+    /// bounds are `t0`, `t1`, clipped to the ray's interval widened by the
+    /// hit tolerance; `None` when nothing is left.
+    #[inline(always)]
+    fn clipped(ray: &Ray<T>, inv_dir: Vec3<T>, delta: T, t0: T, t1: T) -> Option<Self> {
+        let largest = |v: Vec3<T>| greater(greater(v.x, v.y), v.z);
+        let t_tol = delta / largest(ray.direction.abs()) * (T::ONE + T::gamma(2));
+        // A hit's parameter is rounded to `T` last, so one whose exact
+        // parameter lies just outside the interval may be reported inside
+        // it: the interval widens by that rounding too (part of `t_tol`
+        // already when the beam is `new`'s). Finite even for an unbounded
+        // interval whose beam entry or exit overflows (a tiny direction):
+        // no hit has an infinite parameter, and walks place the beam at
+        // `d·t_start`, where 0·∞ would be NaN.
+        let g = T::gamma(4);
+        let t_start = t0.max(ray.t_min - t_tol - ray.t_min.abs() * g).max(-T::MAX);
+        let t_end = t1.min(ray.t_max + t_tol + ray.t_max.abs() * g).min(T::MAX);
         if !(t_start <= t_end) {
             return None;
         }
@@ -77,6 +119,15 @@ impl<T: Real> TraversalRay<T> {
             t_start,
             t_end,
         })
+    }
+
+    /// The parameter after which no node or cell can hold a hit that ties
+    /// with or beats a hit at `t`: `t` plus the hit tolerance and the
+    /// rounding of a hit's parameter to `T`.
+    #[inline]
+    #[must_use]
+    pub fn cutoff_after(&self, t: T) -> T {
+        t + self.t_tol + t.abs() * T::gamma(4)
     }
 
     /// The ray.
@@ -103,15 +154,27 @@ impl<T: Real> TraversalRay<T> {
                 (T::INFINITY, T::NEG_INFINITY)
             };
         }
-        // The offset from the origin first: `s − delta` alone would round
-        // the beam's width away wherever delta is below the rounding unit of
-        // `s` (coordinates far from zero, origins close to the plane).
-        let a = ((s - o) - self.delta) / d;
-        let b = ((s - o) + self.delta) / d;
+        // In the wide type, the offset from the origin first: in `T`,
+        // `s − delta` or `(s − o) − delta` would round the beam's width
+        // away wherever delta is below the rounding unit of the offset (a
+        // thin beam, coordinates far from zero, origins close to the plane).
+        let (sw, ow, dw, delta) = (s.to_wide(), o.to_wide(), d.to_wide(), self.delta.to_wide());
+        let a = ((sw - ow) - delta) / dw;
+        let b = ((sw - ow) + delta) / dw;
         let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+        let (lo, hi) = (T::from_wide(lo).next_down(), T::from_wide(hi).next_up());
         let g = T::gamma(4);
         (lo - lo.abs() * g, hi + hi.abs() * g)
     }
+}
+
+/// The largest distance, per axis, from `o` to a corner of `b`: what every
+/// hit's rounding inside `b` is relative to. Plain selects (no NaN here: the
+/// ray is finite, the bounds too, and their differences at worst infinite).
+#[inline(always)]
+fn reach<W: Real>(b: &Aabb<W>, o: Vec3<W>) -> W {
+    let largest = |v: Vec3<W>| greater(greater(v.x, v.y), v.z);
+    greater(largest((b.min - o).abs()), largest((b.max - o).abs()))
 }
 
 #[cfg(test)]
@@ -189,5 +252,93 @@ mod tests {
             "band [{lo}, {hi}], delta {}",
             tr.delta
         );
+    }
+
+    #[test]
+    fn a_ray_leaving_a_flat_box_misses_it_only_with_the_thin_beam() {
+        // A floor 80 wide at z = 0, a ray spawned 1e-6 above it going up:
+        // f32's beam (gamma(64) of 40, 1.5e-4) still touches the floor, the
+        // wide type's (3e-13) does not.
+        let floor = Aabb::new(Vec3::new(-40.0f32, -25.0, 0.0), Vec3::new(40.0, 25.0, 0.0));
+        let r = Ray::new(Vec3::new(3.0, 2.0, 1e-6), Vec3::new(0.3, -0.2, 0.9)).unwrap();
+        assert!(TraversalRay::new(&r, &floor).is_some(), "premise");
+        assert!(TraversalRay::with_wide_hits(&r, &floor).is_none());
+        // From below, and along the floor just inside the thin beam, it is
+        // entered.
+        let up = Ray::new(Vec3::new(3.0, 2.0, -1.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        let tr = TraversalRay::with_wide_hits(&up, &floor).unwrap();
+        assert!(tr.t_start <= 1.0 && tr.t_end >= 1.0);
+        let along = Ray::new(Vec3::new(-50.0, 0.0, 1e-14), Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        assert!(TraversalRay::with_wide_hits(&along, &floor).is_some());
+    }
+
+    /// The parameters at which the line `o + t·d` lies in `b` grown by
+    /// `margin`, slab by slab with plain divisions (the reference).
+    fn grown_slabs(b: &Aabb<f64>, o: Vec3<f64>, d: Vec3<f64>, margin: f64) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for a in 0..3 {
+            let (lo, hi) = (b.min[a] - margin - o[a], b.max[a] + margin - o[a]);
+            if d[a] == 0.0 {
+                if lo > 0.0 || hi < 0.0 {
+                    return None;
+                }
+                continue;
+            }
+            let (x, y) = (lo / d[a], hi / d[a]);
+            t0 = t0.max(x.min(y));
+            t1 = t1.min(x.max(y));
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    /// A value of either sign spread over many binades.
+    fn spread(max_exp: i32) -> impl proptest::strategy::Strategy<Value = f32> {
+        use proptest::prelude::*;
+        (any::<bool>(), 1.0..2.0f32, -max_exp..=max_exp)
+            .prop_map(|(neg, m, e)| if neg { -m } else { m } * 2f32.powi(e))
+    }
+
+    fn point(max_exp: i32) -> impl proptest::strategy::Strategy<Value = Vec3<f32>> {
+        use proptest::prelude::*;
+        (spread(max_exp), spread(max_exp), spread(max_exp)).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20_000))]
+        /// The thin beam holds every parameter at which the ray passes
+        /// within `gamma(16)` of `f64` (the wide hits' allowance, of the
+        /// farthest corner) of the box, within the ray's interval widened by
+        /// the rounding of a hit's parameter to `f32`: computed in `f64`
+        /// with an allowance far below those margins.
+        #[test]
+        fn the_thin_beam_holds_every_parameter_a_wide_hit_may_have(
+            a in point(8),
+            b in point(8),
+            o in point(8),
+            d in point(8),
+            t_min in 0.0..4.0f32,
+        ) {
+            let bounds = Aabb::new(a.min(b), a.max(b));
+            let ray = Ray::with_interval(o, d, t_min, f32::INFINITY).unwrap();
+            let (ow, dw) = (o.map(f64::from), d.map(f64::from));
+            let bw = Aabb::new(bounds.min.map(f64::from), bounds.max.map(f64::from));
+            let reach = (bw.min - ow).abs().max((bw.max - ow).abs()).max_component();
+            let margin = <f64 as Real>::gamma(16) * reach;
+            let Some((t0, t1)) = grown_slabs(&bw, ow, dw, margin) else {
+                return Ok(());
+            };
+            let lo = t0.max(f64::from(t_min) * (1.0 - f64::from(f32::EPSILON)));
+            if lo > t1 {
+                return Ok(());
+            }
+            let tr = TraversalRay::with_wide_hits(&ray, &bounds);
+            proptest::prop_assert!(tr.is_some(), "missed [{lo}, {t1}]");
+            let tr = tr.unwrap();
+            proptest::prop_assert!(f64::from(tr.t_start) <= lo, "start {} > {lo}", tr.t_start);
+            proptest::prop_assert!(
+                f64::from(tr.t_end) >= t1.min(f64::from(f32::MAX)),
+                "end {} < {t1}", tr.t_end
+            );
+        }
     }
 }

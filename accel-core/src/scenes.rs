@@ -288,6 +288,73 @@ pub fn sphere_in_tiled_box(dense: usize, stadium: f64, tiles: u32) -> TriangleMe
     m
 }
 
+/// The shape of a [`flat_field`]: a field of quads at `z = 0` and two dense
+/// meshes standing on it at its centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatFieldSpec {
+    /// Quads along x and y (two triangles each).
+    pub quads: [u32; 2],
+    /// The field's extent along x and y, centred on the origin.
+    pub extent: [f64; 2],
+    /// Triangles of the two dense meshes together (about).
+    pub dense: usize,
+}
+
+impl FlatFieldSpec {
+    /// The benchmark's field: 100 × 60 quads (12,000 triangles) over 80 × 50,
+    /// with about 200,000 triangles at its centre, 0.6 and 0.4 high.
+    pub const BENCH: Self = Self {
+        quads: [100, 60],
+        extent: [80.0, 50.0],
+        dense: 200_000,
+    };
+}
+
+/// A perfectly flat field (every vertex at `z = 0`, z up) with two small
+/// dense meshes standing on it at its centre: a sphere of diameter 0.6 at
+/// `x = −0.45` and a torus 0.4 high (0.9 across) at `x = 0.45`, touching the field. Rays
+/// that leave the field (shadow and diffuse rays from most pixels) meet
+/// nothing after a few nodes or cells, so a structure's fixed cost per ray
+/// dominates their time.
+#[must_use]
+pub fn flat_field(f: &FlatFieldSpec) -> TriangleMesh<f64> {
+    let [nx, ny] = f.quads.map(|q| q.max(1));
+    let [ex, ey] = f.extent;
+    let mut p = Vec::with_capacity(((nx + 1) * (ny + 1)) as usize);
+    for j in 0..=ny {
+        for i in 0..=nx {
+            p.push(Vec3::new(
+                ex * (f64::from(i) / f64::from(nx) - 0.5),
+                ey * (f64::from(j) / f64::from(ny) - 0.5),
+                0.0,
+            ));
+        }
+    }
+    let at = |i: u32, j: u32| j * (nx + 1) + i;
+    let mut t = Vec::with_capacity(2 * (nx * ny) as usize);
+    for j in 0..ny {
+        for i in 0..nx {
+            t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let mut m = mesh(p, t);
+    let half = f.dense / 2;
+    m.append(&uv_sphere(Vec3::new(-0.45, 0.0, 0.3), 0.3, half))
+        .expect("generated meshes are small");
+    // rings × sides × 2 triangles, rings = 2·sides (a round tube).
+    let sides = ((half as f64 / 4.0).sqrt().round() as u32).max(3);
+    m.append(&torus(
+        Vec3::new(0.45, 0.0, 0.2),
+        0.25,
+        0.2,
+        2 * sides,
+        sides,
+    ))
+    .expect("generated meshes are small");
+    m
+}
+
 /// The generated benchmark scenes, by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum GeneratedScene {
@@ -299,15 +366,19 @@ pub enum GeneratedScene {
     Terrain1M,
     /// A 100k-triangle sphere in a box of side 10⁴ with a floor.
     TeapotInStadium,
+    /// [`FlatFieldSpec::BENCH`]: a flat field of 12k triangles with 200k at its
+    /// centre, where rays leaving the field are all fixed cost.
+    FlatField,
 }
 
 impl GeneratedScene {
     /// Every generated scene.
-    pub const ALL: [Self; 4] = [
+    pub const ALL: [Self; 5] = [
         Self::Sphere100k,
         Self::Soup100k,
         Self::Terrain1M,
         Self::TeapotInStadium,
+        Self::FlatField,
     ];
 
     /// The scene called `name` (as [`GeneratedScene::name`] spells it).
@@ -324,6 +395,7 @@ impl GeneratedScene {
             Self::Soup100k => "soup_100k",
             Self::Terrain1M => "terrain_1m",
             Self::TeapotInStadium => "teapot_in_stadium",
+            Self::FlatField => "flat_field",
         }
     }
 
@@ -335,6 +407,7 @@ impl GeneratedScene {
             Self::Soup100k => random_soup(100_000, 0x50_u64),
             Self::Terrain1M => terrain(1_000_000, 0x7E_u64),
             Self::TeapotInStadium => teapot_in_stadium(100_000, 1.0e4),
+            Self::FlatField => flat_field(&FlatFieldSpec::BENCH),
         }
     }
 
@@ -347,6 +420,14 @@ impl GeneratedScene {
                 Vec3::ZERO,
                 Vec3::new(0.0, 0.0, 1.0),
                 45.0,
+            ),
+            // Looking down at the dense meshes, the field filling most of
+            // the view: most shadow and diffuse rays leave the flat field.
+            Self::FlatField => Camera::look_at(
+                Vec3::new(-4.0, -6.0, 3.0),
+                Vec3::new(0.0, 0.0, 0.2),
+                Vec3::new(0.0, 0.0, 1.0),
+                60.0,
             ),
             Self::Terrain1M => Camera::look_at(
                 Vec3::new(-0.3, -0.3, 0.6),
@@ -513,6 +594,38 @@ mod tests {
         assert_closed(&b);
         let t = terrain(1000, 1);
         assert_eq!(t.triangle_count(), 2 * 22 * 22);
+    }
+
+    #[test]
+    fn flat_field_is_flat_with_its_meshes_standing_at_the_centre() {
+        let f = FlatFieldSpec {
+            quads: [10, 6],
+            extent: [8.0, 5.0],
+            dense: 2000,
+        };
+        let m = flat_field(&f);
+        let field = 2 * 10 * 6;
+        assert!((field + 1800..=field + 2200).contains(&m.triangle_count()));
+        // The field: every vertex of its triangles at z = 0.
+        for i in 0..field {
+            assert!(m.triangle(i).iter().all(|p| p.z == 0.0), "triangle {i}");
+        }
+        let b = m.bounds();
+        assert_eq!((b.min.x, b.max.x, b.min.y, b.max.y), (-4.0, 4.0, -2.5, 2.5));
+        // The meshes rest on the field (lowest point 0 up to rounding),
+        // 0.6 high at most, and within a unit of the centre.
+        let dense: Vec<_> = (field..m.len()).flat_map(|i| m.triangle(i)).collect();
+        let top = dense.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+        let bottom = dense.iter().map(|p| p.z).fold(f64::MAX, f64::min);
+        assert!(
+            (top - 0.6).abs() < 1e-9 && bottom.abs() < 1e-9,
+            "{bottom}..{top}"
+        );
+        assert!(
+            dense
+                .iter()
+                .all(|p| p.x.abs() <= 0.9 + 1e-9 && p.y.abs() <= 0.45 + 1e-9)
+        );
     }
 
     #[test]

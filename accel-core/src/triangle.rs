@@ -594,6 +594,10 @@ pub struct Triangle<T> {
 }
 
 impl<T: Real> Primitive<T> for Triangle<T> {
+    /// The watertight test translates and shears in `f64` from the exact
+    /// `T` inputs ([`intersect_triangle`]).
+    const WIDE_HITS: bool = true;
+
     /// The vertices' bounds; infinite when a vertex is not finite (min and
     /// max would drop a NaN), so that every build refuses the triangle.
     #[inline]

@@ -56,7 +56,14 @@ pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized>(
         a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal)
     });
     let scene = (tree.bounds.max - tree.bounds.min).max_component();
-    let thinnest = T::gamma(TRAVERSAL_ROUNDINGS) * scene * T::HALF;
+    // A set with wide hits is walked with the wide type's beam
+    // ([`accel_core::TraversalRay::with_wide_hits`]), already that thin.
+    let gamma = if tree.prims.wide_hits() {
+        T::from_wide(<T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS))
+    } else {
+        T::gamma(TRAVERSAL_ROUNDINGS)
+    };
+    let thinnest = gamma * scene * T::HALF;
     thinnest * T::from_f64(64.0) >= median
 }
 
@@ -166,19 +173,50 @@ mod tests {
 
     #[test]
     fn a_tree_narrows_its_beam_only_where_the_scene_dwarfs_its_primitives() {
-        use accel_core::TriangleMesh;
         use accel_core::scenes::sphere_in_tiled_box;
+        use accel_core::{Triangle, TriangleMesh};
         // The same dense sphere (triangles about 0.06 across) in a stadium of
         // side 10^4, where the query beam is about 0.02 wide, and of side 10,
         // where it is about 2e-5. The walls are tiled 20 × 20 per face, so
         // no triangle is large enough for the scene to be built in parts
         // (`accel_core::parts`), where each part's beam is its own, and
         // the median triangle is still one of the sphere's.
+        // The walls' tiles lie flat in six planes of 800 triangles each, so
+        // an indexed mesh (whose hits are wide) would set one face apart
+        // (`accel_core::parts::split_flat`); the triangles here, whose
+        // hits the set does not declare wide, stay one part and keep `f32`'s
+        // beam.
         for (stadium, narrows) in [(1e4, true), (10.0, false)] {
             let mesh: TriangleMesh<f32> = sphere_in_tiled_box(8000, stadium, 20).cast().unwrap();
-            let tree = KdTree::new(&mesh).unwrap();
+            let narrow: Vec<NarrowHits> = (0..mesh.len())
+                .map(|i| {
+                    NarrowHits(Triangle {
+                        vertices: mesh.triangle(i),
+                    })
+                })
+                .collect();
+            let tree = KdTree::new(&narrow).unwrap();
             assert_eq!(tree.parts().len(), 1, "premise: one part");
             assert_eq!(!tree.reach.is_empty(), narrows, "stadium {stadium}");
+            // With wide hits the beam is already thin: no narrowing.
+            let tree = KdTree::new(&mesh).unwrap();
+            assert!(tree.reach.is_empty(), "stadium {stadium}");
+        }
+    }
+
+    /// A triangle whose hits are not declared wide.
+    struct NarrowHits(accel_core::Triangle<f32>);
+
+    impl accel_core::Primitive<f32> for NarrowHits {
+        fn bounds(&self) -> Aabb<f32> {
+            self.0.bounds()
+        }
+        fn intersect(
+            &self,
+            ray: &accel_core::PreparedRay<f32>,
+            t_max: f32,
+        ) -> Option<accel_core::PrimHit<f32>> {
+            self.0.intersect(ray, t_max)
         }
     }
 

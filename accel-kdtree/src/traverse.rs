@@ -48,7 +48,7 @@ struct Nearest<'q, T: Real, P: ?Sized> {
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
     #[inline]
     fn cutoff(&self) -> T {
-        self.best.map_or(T::INFINITY, |b| b.t + self.tr.t_tol)
+        self.best.map_or(T::INFINITY, |b| self.tr.cutoff_after(b.t))
     }
 
     #[inline]
@@ -285,6 +285,20 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         }
     }
 
+    /// The beam of `ray` through a part with `bounds`: as thin as the wide
+    /// type's rounding where the primitives' hits are that accurate
+    /// ([`TraversalRay::with_wide_hits`]; the walk's plane bands allow for
+    /// their own rounding, relative to the parameters), `gamma(64)` of `T`
+    /// otherwise.
+    #[inline]
+    fn traversal_ray(&self, ray: &Ray<T>, bounds: &Aabb<T>) -> Option<TraversalRay<T>> {
+        if self.prims.wide_hits() {
+            TraversalRay::with_wide_hits(ray, bounds)
+        } else {
+            TraversalRay::new(ray, bounds)
+        }
+    }
+
     /// The nearest hit: each part walked in turn, with the best hit so far
     /// (each with the beam of its own bounds). A tree of one part, nearly
     /// every tree, takes a path of its own, without the loop.
@@ -313,7 +327,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         best: Option<Hit<T>>,
         counter: &mut C,
     ) -> Option<Hit<T>> {
-        let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+        let Some(tr) = self.traversal_ray(ray, &part.bounds) else {
             return best;
         };
         let mut v = Nearest {
@@ -342,7 +356,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// Whether anything in `part` is hit.
     #[inline]
     fn any_in<C: CostCounter>(&self, part: &KdPart<T>, ray: &Ray<T>, counter: &mut C) -> bool {
-        let Some(tr) = TraversalRay::new(ray, &part.bounds) else {
+        let Some(tr) = self.traversal_ray(ray, &part.bounds) else {
             return false;
         };
         let mut v = AnyHit {

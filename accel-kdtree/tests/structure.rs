@@ -26,9 +26,18 @@ fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized
 
 /// A sphere of `dense` triangles in a box of side `stadium` whose faces are
 /// tiled 20 × 20: no triangle is large enough for the scene to be built in
-/// parts, so one tree must isolate the sphere.
+/// parts, so one tree must isolate the sphere (built with [`one_tree`], which
+/// keeps the 800 tiles of a face from being a flat part of their own).
 fn tiled_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
     sphere_in_tiled_box(dense, stadium, 20)
+}
+
+/// The default parameters without a flat part ([`KdTreeParams::flat_part`]).
+fn one_tree() -> KdTreeParams {
+    KdTreeParams {
+        flat_part: false,
+        ..KdTreeParams::default()
+    }
 }
 
 #[test]
@@ -39,8 +48,9 @@ fn sweep_equals_naive_on_a_parallel_build() {
     mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 800))
         .unwrap();
     // And a sphere in a box 10^4 times wider: with walls tiled finely, one
-    // tree whose isolating cuts do not count towards the depth limit; with
-    // walls of two triangles each, two parts (in either builder).
+    // tree whose isolating cuts do not count towards the depth limit (beside
+    // a flat part of one face's tiles); with walls of two triangles each,
+    // two parts (in either builder).
     for mesh in [
         mesh,
         tiled_stadium(3000, 1.0e4),
@@ -320,7 +330,7 @@ fn a_small_mesh_in_a_huge_box_is_split_as_finely_as_on_its_own() {
     // Triangle tests per ray over the rays that hit the sphere (its
     // triangles come first in both meshes), and how many do.
     let tests_per_ray = |mesh: &TriangleMesh<f64>| {
-        let tree = KdTree::new(mesh).unwrap();
+        let tree = KdTree::with_params(mesh, &one_tree()).unwrap();
         tree.validate().unwrap();
         let mut c = accel_core::TraversalCounters::default();
         let mut hits = 0;
@@ -340,7 +350,7 @@ fn a_small_mesh_in_a_huge_box_is_split_as_finely_as_on_its_own() {
         }
         (c.prims as f64 / f64::from(hits.max(1)), hits)
     };
-    let tree = KdTree::new(&stadium).unwrap();
+    let tree = KdTree::with_params(&stadium, &one_tree()).unwrap();
     assert_eq!(tree.parts().len(), 1, "premise: one tree");
     assert!(
         tree.stats().extra("depth").unwrap() > f64::from(tree.depth_limit()),
@@ -556,4 +566,60 @@ fn bad_input_gets_typed_errors() {
     assert!(tree.occluded(&nan_ray).is_err());
     let inf_region = Aabb::new(Vec3::splat(0.0), Vec3::new(f64::INFINITY, 1.0, 1.0));
     assert!(tree.query_region(&inf_region).is_err());
+}
+
+#[test]
+fn rays_leaving_a_flat_floor_walk_none_of_its_nodes() {
+    use accel_core::scenes::{FlatFieldSpec, flat_field};
+    // A floor of 40 × 25 quads (2,000 triangles) at z = 0 with 4,000
+    // triangles standing at its centre, in f32: the floor is a part of its
+    // own, whose flat bounds a ray spawned just above it and going up
+    // misses with the thin beam. Without the flat part the same rays walk
+    // down to the floor's leaves.
+    let spec = FlatFieldSpec {
+        quads: [40, 25],
+        extent: [80.0, 50.0],
+        dense: 4000,
+    };
+    let mesh: TriangleMesh<f32> = flat_field(&spec).cast().unwrap();
+    let tree = KdTree::new(&mesh).unwrap();
+    let whole = KdTree::with_params(&mesh, &one_tree()).unwrap();
+    assert_eq!((tree.parts().len(), whole.parts().len()), (2, 1));
+    let floor = &tree.parts()[1].bounds;
+    assert_eq!((floor.min.z, floor.max.z), (0.0, 0.0));
+    let brute = BruteForce::new(&mesh).unwrap();
+    let mut split = accel_core::TraversalCounters::default();
+    let mut one = accel_core::TraversalCounters::default();
+    for i in 0..200u16 {
+        // Points of the floor away from the centre, 1e-5 above it (about the
+        // error-bound spawn offset there), rays up and sideways.
+        let (x, y) = (
+            f32::from(i % 20) * 3.7 - 37.0,
+            f32::from(i / 20) * 4.3 - 21.0,
+        );
+        if x.abs() < 5.0 && y.abs() < 5.0 {
+            continue; // rays that may pass the meshes' box
+        }
+        let o = Vec3::new(x, y, 1e-5);
+        let d = Vec3::new(
+            0.3 * (f32::from(i % 7) - 3.0),
+            0.2 * (f32::from(i % 5) - 2.0),
+            1.0,
+        );
+        let ray = Ray::new(o, d).unwrap();
+        let expected = brute.intersect(&ray).unwrap();
+        assert_eq!(tree.intersect_counted(&ray, &mut split).unwrap(), expected);
+        assert_eq!(whole.intersect_counted(&ray, &mut one).unwrap(), expected);
+        assert_eq!(tree.occluded(&ray).unwrap(), expected.is_some());
+    }
+    assert_eq!(
+        (split.nodes, split.prims),
+        (0, 0),
+        "the floor's tree is walked"
+    );
+    assert!(
+        one.nodes >= 190 * 5,
+        "premise: one tree walks {} nodes",
+        one.nodes
+    );
 }

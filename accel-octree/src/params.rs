@@ -144,6 +144,13 @@ pub struct OctreeParams {
     /// level by level in cell order until the next one would exceed it, and
     /// the cells left over stay leaves. Default 2 GiB.
     pub max_bytes: u64,
+    /// Whether a scene that stays one part, with many primitives lying flat
+    /// in one axis-aligned plane (a floor), gets a root grid of its own for
+    /// them ([`accel_core::parts::split_flat`]): with primitives whose hits
+    /// are wide ([`accel_core::PrimitiveSet::wide_hits`]), a ray leaving the
+    /// floor then misses that root's flat box, tested with the wide type's
+    /// thin beam, and walks no cell of it. Default `true`.
+    pub flat_part: bool,
 }
 
 impl Default for OctreeParams {
@@ -158,6 +165,7 @@ impl Default for OctreeParams {
             max_depth: 6,
             fit_children: true,
             max_bytes: 1 << 31,
+            flat_part: true,
         }
     }
 }

@@ -757,6 +757,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> PrimitiveSet<T> for Subsample<'_, T, 
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
         self.prims.overlaps_box(self.index[i], b)
     }
+    fn wide_hits(&self) -> bool {
+        self.prims.wide_hits()
+    }
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.prims.clipped_bounds(self.index[i], b)
     }

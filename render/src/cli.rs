@@ -34,7 +34,7 @@ pub mod limits {
 ///
 /// SCENE is a `.gltf`/`.glb` file or a built-in scene: `default` (the
 /// embedded procedural scene, used when SCENE is omitted), `sphere_100k`,
-/// `soup_100k`, `terrain_1m`, `teapot_in_stadium`.
+/// `soup_100k`, `terrain_1m`, `teapot_in_stadium`, `flat_field`.
 #[derive(Debug, Parser)]
 #[command(
     name = "render",

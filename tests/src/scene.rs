@@ -7,7 +7,9 @@
 //! description tests `f32` and `f64` at their own extremes.
 
 use crate::Mixed;
-use accel_core::scenes::{box_mesh, teapot_in_stadium, terrain, torus, uv_sphere};
+use accel_core::scenes::{
+    FlatFieldSpec, box_mesh, flat_field, teapot_in_stadium, terrain, torus, uv_sphere,
+};
 use accel_core::{Aabb, Real, TriangleMesh, Vec3};
 
 /// A triangle in unit-sized coordinates.
@@ -189,6 +191,17 @@ pub enum SceneSpec {
         /// Placement.
         place: Placement,
     },
+    /// A flat field of `quads × quads` quads over `10 × 10` with two
+    /// dense meshes (about `dense` triangles) standing at its centre
+    /// ([`accel_core::scenes::flat_field`]): rays leaving the field.
+    FlatField {
+        /// Quads along each side of the field.
+        quads: u32,
+        /// Triangles of the dense meshes.
+        dense: usize,
+        /// Placement.
+        place: Placement,
+    },
     /// Every vertex at z = 0 (before placement): a flat scene.
     Flat(Vec<[[f64; 2]; 3]>, Placement),
     /// Every vertex on one line: parameters of the three vertices along it.
@@ -255,6 +268,16 @@ fn placed_mesh(tris: &[[Vec3<f64>; 3]], place: &Placement) -> TriangleMesh<f64> 
     TriangleMesh::from_triangles(&t).expect("placed coordinates are finite")
 }
 
+/// An indexed mesh placed, its sharing of vertices kept.
+fn placed(m: &TriangleMesh<f64>, place: &Placement) -> TriangleMesh<f64> {
+    let p = m
+        .positions()
+        .iter()
+        .map(|p| place.point(p.to_array()))
+        .collect();
+    TriangleMesh::new(p, m.indices().to_vec()).expect("placed coordinates are finite")
+}
+
 fn unit_tris(tris: &[Tri]) -> Vec<[Vec3<f64>; 3]> {
     tris.iter().map(|t| t.map(Vec3::from)).collect()
 }
@@ -284,28 +307,24 @@ impl SceneSpec {
                     .collect();
                 Scene::Mesh(placed_mesh(&t, place))
             }
-            Self::Closed(shape, place) => {
-                let m = shape.mesh();
-                let p = m
-                    .positions()
-                    .iter()
-                    .map(|p| place.point(p.to_array()))
-                    .collect();
-                Scene::Mesh(TriangleMesh::new(p, m.indices().to_vec()).expect("finite"))
-            }
+            Self::Closed(shape, place) => Scene::Mesh(placed(&shape.mesh(), place)),
             Self::Teapot {
                 dense,
                 stadium,
                 place,
-            } => {
-                let m = teapot_in_stadium(*dense, *stadium);
-                let p = m
-                    .positions()
-                    .iter()
-                    .map(|p| place.point(p.to_array()))
-                    .collect();
-                Scene::Mesh(TriangleMesh::new(p, m.indices().to_vec()).expect("finite"))
-            }
+            } => Scene::Mesh(placed(&teapot_in_stadium(*dense, *stadium), place)),
+            Self::FlatField {
+                quads,
+                dense,
+                place,
+            } => Scene::Mesh(placed(
+                &flat_field(&FlatFieldSpec {
+                    quads: [*quads, *quads],
+                    extent: [10.0, 10.0],
+                    dense: *dense,
+                }),
+                place,
+            )),
             Self::Flat(tris, place) => {
                 let t: Vec<[Vec3<f64>; 3]> = tris
                     .iter()

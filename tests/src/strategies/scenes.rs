@@ -123,6 +123,10 @@ pub fn scene(place: BoxedStrategy<Placement>) -> BoxedStrategy<SceneSpec> {
         // Large enough to be built in parts (see `SceneSpec::Teapot`).
         2 => (260usize..400, prop::sample::select(vec![100.0, 1e4]), p())
             .prop_map(|(dense, stadium, place)| SceneSpec::Teapot { dense, stadium, place }),
+        // From 12 quads a side (288 triangles) the floor is a part of its own
+        // (`accel_core::parts::split_flat`).
+        2 => (2u32..24, 40usize..400, p())
+            .prop_map(|(quads, dense, place)| SceneSpec::FlatField { quads, dense, place }),
         2 => (prop::collection::vec([[unit(), unit()], [unit(), unit()], [unit(), unit()]], 1..16), p())
             .prop_map(|(t, p)| SceneSpec::Flat(t, p)),
         2 => (
