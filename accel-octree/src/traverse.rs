@@ -231,7 +231,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     /// The nearest hit, counting the work in `counter`: each part's root
     /// walked in turn, on the beam of its own box, the later ones with the
     /// best hit of the earlier. A tree of one part, nearly every tree, takes
-    /// a path of its own that prepares nothing for a ray that misses it.
+    /// a path of its own without the loop; neither prepares anything for a
+    /// ray that misses it.
     fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
@@ -250,8 +251,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
             q.walk(root, &tr, tr.t_start);
             return Ok(q.best);
         }
-        let mut q = Nearest::new(self, PreparedRay::new(*ray), counter);
-        for root in &self.nodes[..self.parts] {
+        // The ray is prepared (its shear takes three divisions) only once
+        // a part's box is met: a ray that misses every part prepares nothing.
+        let roots = &self.nodes[..self.parts];
+        let Some((first, tr)) = roots
+            .iter()
+            .enumerate()
+            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
+        else {
+            return Ok(None);
+        };
+        let mut q = Nearest::new(self, tr.prepared, counter);
+        q.walk(&roots[first], &tr, tr.t_start);
+        for root in &roots[first + 1..] {
             if let Some(tr) = self.part_beam(ray, root) {
                 q.walk(root, &tr, tr.t_start);
             }
@@ -273,11 +285,21 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
             };
             return Ok(Any::new(self, tr.prepared, counter).walk(root, &tr, tr.t_start));
         }
-        let mut q = Any::new(self, PreparedRay::new(*ray), counter);
-        Ok(self.nodes[..self.parts].iter().any(|root| {
-            self.part_beam(ray, root)
-                .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
-        }))
+        // Prepared only once a part's box is met, as in `nearest`.
+        let roots = &self.nodes[..self.parts];
+        let Some((first, tr)) = roots
+            .iter()
+            .enumerate()
+            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
+        else {
+            return Ok(false);
+        };
+        let mut q = Any::new(self, tr.prepared, counter);
+        Ok(q.walk(&roots[first], &tr, tr.t_start)
+            || roots[first + 1..].iter().any(|root| {
+                self.part_beam(ray, root)
+                    .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
+            }))
     }
 
     /// The beam of `ray` through the part whose root is `root`, `None` when
