@@ -177,18 +177,24 @@ impl AccelConfig {
             Self::Octree(p) => match octree_preset_name(p) {
                 Some("default") => "octree".to_owned(),
                 Some(name) => format!("octree {name}"),
-                None => format!("octree t={} d={}", p.split_threshold, p.max_depth),
+                None => format!(
+                    "octree t={} d={}{}",
+                    p.split_threshold,
+                    p.max_depth,
+                    flat_label(p.flat_part)
+                ),
             },
             Self::KdTree(p) => match kdtree_preset_name(p) {
                 Some("default") => "kdtree".to_owned(),
                 Some(name) => format!("kdtree {name}"),
                 None => format!(
-                    "kdtree ci={} ct={} eb={}{}{}",
+                    "kdtree ci={} ct={} eb={}{}{}{}",
                     p.intersect_cost,
                     p.traversal_cost,
                     p.empty_bonus,
                     binning_label(p),
-                    depth_label(p)
+                    depth_label(p),
+                    flat_label(p.flat_part)
                 ),
             },
             Self::Brute => "brute".to_owned(),
@@ -207,6 +213,11 @@ fn binning_label(p: &KdTreeParams) -> String {
     } else {
         format!(" binned>{}/{}", p.binned_above, p.bins)
     }
+}
+
+/// ` no-flat` for a tree built without a flat part.
+fn flat_label(flat_part: bool) -> &'static str {
+    if flat_part { "" } else { " no-flat" }
 }
 
 /// A kD-tree's depth limit constant when not the default: ` db=D`.

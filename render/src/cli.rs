@@ -252,6 +252,10 @@ pub struct DialArgs {
     /// Octree depth limit: levels of child grids below the root (0 to 24).
     #[arg(long, value_name = "D", allow_negative_numbers = true)]
     pub octree_depth: Option<u32>,
+    /// Octree without a flat part: primitives lying flat in one plane (a
+    /// floor) stay under the root grid with the rest.
+    #[arg(long)]
+    pub octree_no_flat_part: bool,
     /// kD-tree preset. Needs --accel kdtree.
     #[arg(long, value_name = "PRESET", value_parser = PossibleValuesParser::new(KDTREE_PRESETS))]
     pub kdtree_preset: Option<String>,
@@ -275,6 +279,11 @@ pub struct DialArgs {
     /// n)): 8 is pbrt's (the default), lower builds faster.
     #[arg(long, value_name = "D", allow_negative_numbers = true)]
     pub kdtree_depth_base: Option<f64>,
+    /// kD-tree without a flat part: primitives lying flat in one plane (a
+    /// floor) stay in one tree with the rest, so rays leaving the floor walk
+    /// down to the leaf they start in.
+    #[arg(long)]
+    pub kdtree_no_flat_part: bool,
 }
 
 impl DialArgs {
@@ -316,6 +325,11 @@ impl DialArgs {
             AccelKind::Octree,
         );
         add(
+            self.octree_no_flat_part,
+            "--octree-no-flat-part",
+            AccelKind::Octree,
+        );
+        add(
             self.kdtree_preset.is_some(),
             "--kdtree-preset",
             AccelKind::KdTree,
@@ -348,6 +362,11 @@ impl DialArgs {
         add(
             self.kdtree_depth_base.is_some(),
             "--kdtree-depth-base",
+            AccelKind::KdTree,
+        );
+        add(
+            self.kdtree_no_flat_part,
+            "--kdtree-no-flat-part",
             AccelKind::KdTree,
         );
         given
@@ -393,6 +412,9 @@ impl DialArgs {
                 if let Some(d) = self.octree_depth {
                     p.max_depth = d;
                 }
+                if self.octree_no_flat_part {
+                    p.flat_part = false;
+                }
                 AccelConfig::Octree(p)
             }
             AccelKind::KdTree => {
@@ -418,6 +440,9 @@ impl DialArgs {
                 }
                 if let Some(d) = self.kdtree_depth_base {
                     p.depth_base = d;
+                }
+                if self.kdtree_no_flat_part {
+                    p.flat_part = false;
                 }
                 AccelConfig::KdTree(p)
             }
@@ -598,6 +623,28 @@ mod tests {
         assert_eq!((p.intersect_cost, p.empty_bonus), (20.0, 0.5));
         assert_eq!((p.binned_above, p.bins), (usize::MAX, 16));
         assert_eq!(p.depth_base, 5.5);
+        assert!(p.flat_part, "a flat part unless refused");
+        let cli = parse(&["--accel", "kdtree", "--kdtree-no-flat-part"]).unwrap();
+        let AccelConfig::KdTree(p) = cli.render.dials.config(AccelKind::KdTree) else {
+            panic!("not a kd-tree")
+        };
+        assert!(!p.flat_part);
+        assert_eq!(
+            AccelConfig::KdTree(p).label(),
+            "kdtree ci=5 ct=1 eb=0.3 no-flat"
+        );
+        let cli = parse(&["--accel", "octree", "--octree-no-flat-part"]).unwrap();
+        let AccelConfig::Octree(p) = cli.render.dials.config(AccelKind::Octree) else {
+            panic!("not an octree")
+        };
+        assert!(!p.flat_part);
+        assert_eq!(AccelConfig::Octree(p).label(), "octree t=12 d=6 no-flat");
+        let err = cli
+            .render
+            .dials
+            .check_structure_options(&[AccelKind::KdTree], false)
+            .unwrap_err();
+        assert!(err.contains("--octree-no-flat-part"), "{err}");
         assert!(parse(&["--accel", "kdtree", "--kdtree-binned-above", "lots"]).is_err());
         assert!(
             d.check_structure_options(&[AccelKind::KdTree], false)

@@ -16,9 +16,18 @@ fn stadium() -> TriangleMesh<f64> {
 
 /// The same sphere in a box whose walls are tiled 20 × 20 and no floor: no
 /// triangle is large, so the scene is one part and one root grid must
-/// isolate the sphere.
+/// isolate the sphere (built with [`one_root`], which keeps the 800 tiles
+/// of a face from being a flat part of their own).
 fn tiled_stadium() -> TriangleMesh<f64> {
     sphere_in_tiled_box(5_000, 1.0e4, 20)
+}
+
+/// `p` without a flat part ([`OctreeParams::flat_part`]).
+fn one_root(p: OctreeParams) -> OctreeParams {
+    OctreeParams {
+        flat_part: false,
+        ..p
+    }
 }
 
 /// The cells of grid `id` of `o` as (linear index, entry).
@@ -188,7 +197,7 @@ fn presets_shape_the_tree_as_documented() {
     let mesh = tiled_stadium();
     let n = mesh.len() as f64;
 
-    let classic = Octree::with_params(&mesh, &OctreeParams::classic()).unwrap();
+    let classic = Octree::with_params(&mesh, &one_root(OctreeParams::classic())).unwrap();
     assert_eq!(classic.root_geometry().resolution(), [2, 2, 2]);
     for (id, node) in classic.nodes.iter().enumerate() {
         assert_eq!(node.geometry.resolution(), [2, 2, 2], "grid {id}");
@@ -201,7 +210,7 @@ fn presets_shape_the_tree_as_documented() {
         }
     }
 
-    let default = Octree::new(&mesh).unwrap();
+    let default = Octree::with_params(&mesh, &one_root(OctreeParams::default())).unwrap();
     let root_cells = default.root_geometry().cell_count() as f64;
     let ize = 8.0 * n.powf(0.6);
     assert!(
@@ -219,11 +228,11 @@ fn presets_shape_the_tree_as_documented() {
     assert!(d.x <= 2.0 + 1e-9 && d.y <= 2.0 + 1e-9, "{d:?}");
     assert_matches_brute(&default, &mesh);
 
-    let two = Octree::with_params(&mesh, &OctreeParams::two_level()).unwrap();
+    let two = Octree::with_params(&mesh, &one_root(OctreeParams::two_level())).unwrap();
     assert!(two.levels().len() <= 2);
     assert_eq!(two.root_geometry(), default.root_geometry());
 
-    let grid_root = Octree::with_params(&mesh, &OctreeParams::grid_root()).unwrap();
+    let grid_root = Octree::with_params(&mesh, &one_root(OctreeParams::grid_root())).unwrap();
     let grid = Grid::new(&mesh).unwrap();
     assert_eq!(grid_root.root_geometry(), grid.geometry());
     assert!(grid_root.grid_count() > 1);
