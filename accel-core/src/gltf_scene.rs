@@ -403,6 +403,69 @@ impl Loader<'_> {
     }
 }
 
+/// Refuses buffer URIs that could read outside the file's own folder or
+/// without end (issue 32, item 2): a security rule, not a glTF one. An
+/// external buffer must be a relative path with no `..` component, no
+/// scheme but `data:`, naming a regular file (not `/dev/zero`, a FIFO or a
+/// symlink to one), so a read is bounded by that file's size.
+fn check_buffer_uris(path: &Path, document: &gltf::Document) -> Result<(), LoadError> {
+    let refuse = |index: usize, uri: &str, why: &str| LoadError::Gltf {
+        path: path.to_owned(),
+        message: format!("buffer {index} uri {uri:?} refused: {why}"),
+    };
+    let folder = path.parent().unwrap_or(Path::new("."));
+    for buffer in document.buffers() {
+        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+            continue;
+        };
+        if uri.starts_with("data:") {
+            continue;
+        }
+        let index = buffer.index();
+        // Checked as the importer reads it: percent-decoded.
+        let Ok(decoded) = urlencoding::decode(uri) else {
+            return Err(refuse(index, uri, "not valid percent-encoded UTF-8"));
+        };
+        let decoded = decoded.as_ref();
+        if decoded.contains(':') || decoded.starts_with('/') || decoded.starts_with('\\') {
+            return Err(refuse(
+                index,
+                uri,
+                "only relative paths inside the file's folder are read",
+            ));
+        }
+        if decoded.contains('\\') {
+            return Err(refuse(
+                index,
+                uri,
+                "backslashes are not path separators here",
+            ));
+        }
+        let relative = Path::new(decoded);
+        if relative.components().any(|c| {
+            !matches!(
+                c,
+                std::path::Component::Normal(_) | std::path::Component::CurDir
+            )
+        }) {
+            return Err(refuse(index, uri, "it leaves the file's folder"));
+        }
+        let target = folder.join(relative);
+        match std::fs::metadata(&target) {
+            Ok(meta) if meta.is_file() => {}
+            Ok(_) => return Err(refuse(index, uri, "not a regular file")),
+            Err(e) => {
+                return Err(refuse(
+                    index,
+                    uri,
+                    &format!("cannot read {}: {e}", target.display()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Loads a `.gltf` or `.glb` file.
 ///
 /// # Errors
@@ -420,6 +483,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
     let gltf::Gltf { document, blob } =
         gltf::Gltf::open(path).map_err(|e| gltf_error("the file", e))?;
     let base = path.parent();
+    check_buffer_uris(path, &document)?;
     let buffers =
         gltf::import_buffers(&document, base, blob).map_err(|e| gltf_error("its buffers", e))?;
     let mut loader = Loader {
@@ -485,6 +549,41 @@ pub fn shared_scene_files() -> Vec<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    // See: issue 32, item 2 (buffer URIs read /dev/zero until memory ran out).
+    #[test]
+    fn buffer_uris_outside_the_folder_or_not_regular_files_are_refused() {
+        let dir = std::env::temp_dir().join(format!("accel-uri-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for uri in [
+            "/dev/zero",
+            "../../../dev/zero",
+            "a/%2e%2e/b.bin",
+            "file:///dev/zero",
+        ] {
+            let file = dir.join("bad.gltf");
+            let json = format!(
+                r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{uri}","byteLength":12}}]}}"#
+            );
+            std::fs::write(&file, json).unwrap();
+            let err = super::load(&file).unwrap_err().to_string();
+            assert!(err.contains("refused") && err.contains(uri), "{uri}: {err}");
+        }
+        // A name with an encoded space is read as the importer decodes it:
+        // not refused (its buffer is too short for the mesh-less file to
+        // matter).
+        std::fs::write(dir.join("a b.bin"), [0u8; 12]).unwrap();
+        let file = dir.join("ok.gltf");
+        std::fs::write(
+            &file,
+            r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"a%20b.bin","byteLength":12}]}"#,
+        )
+        .unwrap();
+        if let Err(e) = load(&file) {
+            assert!(!e.to_string().contains("refused"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn strips_and_fans_become_triangles() {

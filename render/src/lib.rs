@@ -43,6 +43,7 @@ pub mod output;
 pub mod peers;
 pub mod plot;
 pub mod rayfile;
+pub mod report;
 pub mod scene;
 pub mod shade;
 pub mod sweep;

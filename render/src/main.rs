@@ -38,8 +38,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // One line: the error and its causes, outermost first.
-            eprintln!("render: error: {e:#}");
+            // One line: the error and its causes, outermost first, each once.
+            eprintln!("render: error: {}", render::report::one_line(&e));
             ExitCode::FAILURE
         }
     }

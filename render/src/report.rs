@@ -1,0 +1,54 @@
+//! One-line error reports: an error and its causes, each said once.
+//!
+//! Library errors often name their cause in their own message *and* return
+//! it from `source()` (thiserror does so for any field called `source`), so
+//! the usual `{:#}` chain printed `X: X`. [`one_line`] walks the chain and
+//! skips a cause whose text the message already contains (issue 32, item 5).
+
+/// The error and its causes, outermost first, joined by `": "`, leaving out
+/// every cause whose text is already part of the report.
+#[must_use]
+pub fn one_line(err: &anyhow::Error) -> String {
+    let mut report = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || report.contains(&text) {
+            continue;
+        }
+        if !report.is_empty() {
+            report.push_str(": ");
+        }
+        report.push_str(&text);
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("disk full")]
+    struct Inner;
+
+    /// Names its source in its message and returns it from `source()`.
+    #[derive(Debug, thiserror::Error)]
+    #[error("writing out.png: {source}")]
+    struct Outer {
+        source: Inner,
+    }
+
+    // See: issue 32, item 5 (every error printed twice).
+    #[test]
+    fn a_cause_named_in_the_message_is_said_once() {
+        let err = anyhow::Error::from(Outer { source: Inner });
+        assert_eq!(format!("{err:#}"), "writing out.png: disk full: disk full");
+        assert_eq!(one_line(&err), "writing out.png: disk full");
+    }
+
+    #[test]
+    fn context_and_unnamed_causes_are_kept_in_order() {
+        let err = anyhow::Error::from(Inner).context("rendering");
+        assert_eq!(one_line(&err), "rendering: disk full");
+    }
+}
