@@ -219,15 +219,21 @@ pub fn terrain(triangles: usize, seed: u64) -> TriangleMesh<f64> {
             p.push(Vec3::new(x, y, terrain_height(x, y, &phases)));
         }
     }
-    let at = |i: u32, j: u32| j * (k + 1) + i;
-    let mut t = Vec::with_capacity(2 * (k * k) as usize);
-    for j in 0..k {
-        for i in 0..k {
+    mesh(p, quad_grid_triangles(k, k))
+}
+
+/// The triangles of an `nx × ny` grid of quads over `(nx + 1)·(ny + 1)`
+/// vertices numbered row by row, two per quad.
+fn quad_grid_triangles(nx: u32, ny: u32) -> Vec<[u32; 3]> {
+    let at = |i: u32, j: u32| j * (nx + 1) + i;
+    let mut t = Vec::with_capacity(2 * (nx * ny) as usize);
+    for j in 0..ny {
+        for i in 0..nx {
             t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
             t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
         }
     }
-    mesh(p, t)
+    t
 }
 
 /// `n` small random triangles in the unit cube, each of size about the mean
@@ -330,15 +336,7 @@ pub fn flat_field(f: &FlatFieldSpec) -> TriangleMesh<f64> {
             ));
         }
     }
-    let at = |i: u32, j: u32| j * (nx + 1) + i;
-    let mut t = Vec::with_capacity(2 * (nx * ny) as usize);
-    for j in 0..ny {
-        for i in 0..nx {
-            t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
-    let mut m = mesh(p, t);
+    let mut m = mesh(p, quad_grid_triangles(nx, ny));
     let half = f.dense / 2;
     m.append(&uv_sphere(Vec3::new(-0.45, 0.0, 0.3), 0.3, half))
         .expect("generated meshes are small");
@@ -353,6 +351,31 @@ pub fn flat_field(f: &FlatFieldSpec) -> TriangleMesh<f64> {
     ))
     .expect("generated meshes are small");
     m
+}
+
+/// Rays that leave the floor of a [`flat_field`] of the extent of `f`:
+/// from the points of a 20 × 10 lattice over it, `height` above the floor
+/// (about the error-bound spawn offset), up and sideways; the points within
+/// a sixteenth of the extent of the centre, whose rays may pass the dense
+/// meshes, are left out (191 rays for a field 80 × 50).
+#[must_use]
+pub fn rays_leaving_the_floor<T: Real>(f: &FlatFieldSpec, height: f64) -> Vec<Ray<T>> {
+    let [ex, ey] = f.extent;
+    (0..200u32)
+        .filter_map(|i| {
+            let (a, b) = (f64::from(i % 20), f64::from(i / 20));
+            let (x, y) = (ex * (a / 21.6 - 0.4625), ey * (b / 11.6 - 0.42));
+            if x.abs() < ex / 16.0 && y.abs() < ey / 10.0 {
+                return None;
+            }
+            let d = Vec3::new(
+                0.3 * (f64::from(i % 7) - 3.0),
+                0.2 * (f64::from(i % 5) - 2.0),
+                1.0,
+            );
+            Ray::new(Vec3::new(x, y, height).cast(), d.cast()).ok()
+        })
+        .collect()
 }
 
 /// The generated benchmark scenes, by name.

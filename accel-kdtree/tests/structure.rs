@@ -570,7 +570,7 @@ fn bad_input_gets_typed_errors() {
 
 #[test]
 fn rays_leaving_a_flat_floor_walk_none_of_its_nodes() {
-    use accel_core::scenes::{FlatFieldSpec, flat_field};
+    use accel_core::scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
     // A floor of 40 × 25 quads (2,000 triangles) at z = 0 with 4,000
     // triangles standing at its centre, in f32: the floor is a part of its
     // own, whose flat bounds a ray spawned just above it and going up
@@ -590,23 +590,11 @@ fn rays_leaving_a_flat_floor_walk_none_of_its_nodes() {
     let brute = BruteForce::new(&mesh).unwrap();
     let mut split = accel_core::TraversalCounters::default();
     let mut one = accel_core::TraversalCounters::default();
-    for i in 0..200u16 {
-        // Points of the floor away from the centre, 1e-5 above it (about the
-        // error-bound spawn offset there), rays up and sideways.
-        let (x, y) = (
-            f32::from(i % 20) * 3.7 - 37.0,
-            f32::from(i / 20) * 4.3 - 21.0,
-        );
-        if x.abs() < 5.0 && y.abs() < 5.0 {
-            continue; // rays that may pass the meshes' box
-        }
-        let o = Vec3::new(x, y, 1e-5);
-        let d = Vec3::new(
-            0.3 * (f32::from(i % 7) - 3.0),
-            0.2 * (f32::from(i % 5) - 2.0),
-            1.0,
-        );
-        let ray = Ray::new(o, d).unwrap();
+    // Points of the floor away from the centre, 1e-5 above it (about the
+    // error-bound spawn offset there), rays up and sideways.
+    let rays = rays_leaving_the_floor::<f32>(&spec, 1e-5);
+    assert_eq!(rays.len(), 191);
+    for ray in rays {
         let expected = brute.intersect(&ray).unwrap();
         assert_eq!(tree.intersect_counted(&ray, &mut split).unwrap(), expected);
         assert_eq!(whole.intersect_counted(&ray, &mut one).unwrap(), expected);

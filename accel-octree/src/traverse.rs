@@ -254,11 +254,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
         // The ray is prepared (its shear takes three divisions) only once
         // a part's box is met: a ray that misses every part prepares nothing.
         let roots = &self.nodes[..self.parts];
-        let Some((first, tr)) = roots
-            .iter()
-            .enumerate()
-            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
-        else {
+        let Some((first, tr)) = self.first_part_met(ray) else {
             return Ok(None);
         };
         let mut q = Nearest::new(self, tr.prepared, counter);
@@ -287,11 +283,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
         }
         // Prepared only once a part's box is met, as in `nearest`.
         let roots = &self.nodes[..self.parts];
-        let Some((first, tr)) = roots
-            .iter()
-            .enumerate()
-            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
-        else {
+        let Some((first, tr)) = self.first_part_met(ray) else {
             return Ok(false);
         };
         let mut q = Any::new(self, tr.prepared, counter);
@@ -300,6 +292,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
                 self.part_beam(ray, root)
                     .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
             }))
+    }
+
+    /// The first part whose box the ray's beam meets, by its index among
+    /// the roots, and that beam.
+    #[inline]
+    fn first_part_met(&self, ray: &Ray<T>) -> Option<(usize, TraversalRay<T>)> {
+        self.nodes[..self.parts]
+            .iter()
+            .enumerate()
+            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
     }
 
     /// The beam of `ray` through the part whose root is `root`, `None` when

@@ -1,7 +1,7 @@
 //! A floor as a part of its own: rays that leave it walk none of its cells.
 
-use accel_core::scenes::{FlatFieldSpec, flat_field};
-use accel_core::{Accelerator, BruteForce, Ray, TraversalCounters, TriangleMesh, Vec3};
+use accel_core::scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
+use accel_core::{Accelerator, BruteForce, TraversalCounters, TriangleMesh};
 use accel_octree::{Octree, OctreeParams};
 
 #[test]
@@ -32,23 +32,11 @@ fn rays_leaving_a_flat_floor_walk_none_of_its_cells() {
     let brute = BruteForce::new(&mesh).unwrap();
     let mut with_part = TraversalCounters::default();
     let mut without = TraversalCounters::default();
-    for i in 0..200u16 {
-        // Points of the floor away from the centre, 1e-5 above it (about
-        // the error-bound spawn offset there), rays up and sideways.
-        let (x, y) = (
-            f32::from(i % 20) * 3.7 - 37.0,
-            f32::from(i / 20) * 4.3 - 21.0,
-        );
-        if x.abs() < 5.0 && y.abs() < 5.0 {
-            continue; // rays that may pass the meshes' box
-        }
-        let o = Vec3::new(x, y, 1e-5);
-        let d = Vec3::new(
-            0.3 * (f32::from(i % 7) - 3.0),
-            0.2 * (f32::from(i % 5) - 2.0),
-            1.0,
-        );
-        let ray = Ray::new(o, d).unwrap();
+    // Points of the floor away from the centre, 1e-5 above it (about the
+    // error-bound spawn offset there), rays up and sideways.
+    let rays = rays_leaving_the_floor::<f32>(&spec, 1e-5);
+    assert_eq!(rays.len(), 191);
+    for ray in rays {
         let expected = brute.intersect(&ray).unwrap();
         assert_eq!(
             split.intersect_counted(&ray, &mut with_part).unwrap(),
