@@ -165,6 +165,23 @@ pub fn split_flat<T: Real>(boxes: &[Aabb<T>]) -> Option<[Group<T>; 2]> {
     Some([rest, flat])
 }
 
+/// [`partition`], then, where the scene stays one part and `floor_apart`
+/// says so, [`split_flat`]: the parts a structure builds. Structures pass
+/// `floor_apart` only where their walk can miss a flat part's bounds (their
+/// own dial on, and primitives with wide hits).
+#[must_use]
+pub fn partition_with_floor<T: Real>(
+    boxes: &[Aabb<T>],
+    bounds: &Aabb<T>,
+    floor_apart: bool,
+) -> Vec<Group<T>> {
+    let groups = partition(boxes, bounds);
+    match (groups.len(), floor_apart) {
+        (1, true) => split_flat(boxes).map_or(groups, Vec::from),
+        _ => groups,
+    }
+}
+
 /// The value repeated most often in the sorted `values` (the first of
 /// equals), and how often.
 fn most_common(values: &[u64]) -> (u64, usize) {

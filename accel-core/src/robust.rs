@@ -74,12 +74,9 @@ impl<T: Real> TraversalRay<T> {
         if ray.is_empty_interval() || bounds.is_empty() {
             return None;
         }
-        let wide = |v: Vec3<T>| v.map(T::to_wide);
-        let (o, d) = (wide(ray.origin), wide(ray.direction));
-        let b = Aabb {
-            min: wide(bounds.min),
-            max: wide(bounds.max),
-        };
+        // Exact: `T::Wide` holds every `T` value.
+        let (o, d): (Vec3<T::Wide>, _) = (ray.origin.cast(), ray.direction.cast());
+        let b: Aabb<T::Wide> = bounds.cast();
         let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
         let (t0, t1) = b.beam_interval_inv(o, d, PreparedRay::reciprocal(d), delta)?;
         // Rounded outward to `T`: the beam only grows.

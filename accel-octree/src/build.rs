@@ -12,7 +12,7 @@
 
 use crate::node::{CHILD, MAX_PRIMITIVES, Node};
 use crate::params::{OctreeParams, ResolutionRule};
-use accel_core::parts::{Group, partition, split_flat};
+use accel_core::parts::{Group, partition_with_floor};
 use accel_core::{Aabb, BuildError, PrimitiveSet, Real, Vec3, primitive_bounds};
 use accel_grid::build::PrimitiveCells;
 use accel_grid::cells::GridGeometry;
@@ -103,11 +103,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             bounds: Aabb::from_point(Vec3::ZERO),
         }]
     } else {
-        let groups = partition(&boxes, &scene);
-        match (groups.len(), params.flat_part && prims.wide_hits()) {
-            (1, true) => split_flat(&boxes).map_or(groups, Vec::from),
-            _ => groups,
-        }
+        partition_with_floor(&boxes, &scene, params.flat_part && prims.wide_hits())
     };
     let whole = groups.len() == 1;
     let parts = groups.len();

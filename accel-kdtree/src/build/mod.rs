@@ -409,8 +409,7 @@ fn check_count(n: usize) -> Result<(), BuildError> {
 
 /// Builds the tree over `prims` with the event sweep, or with the naive
 /// O(n²) reference builder when `naive` is set: one tree per part
-/// ([`parts::partition`], or [`parts::split_flat`] for a scene that stays
-/// whole), appended one after the other.
+/// ([`parts::partition_with_floor`]), appended one after the other.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
     params: &KdTreeParams,
@@ -420,16 +419,10 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     params.validate()?;
     let (mut boxes, bounds) = primitive_bounds(prims)?;
     check_count(prims.len())?;
-    let mut groups = parts::partition(&boxes, &bounds);
-    // A floor apart, where the walk's beam is thin enough for rays leaving
-    // it to miss its flat bounds ([`parts::split_flat`]).
-    if groups.len() == 1
-        && params.flat_part
-        && prims.wide_hits()
-        && let Some(split) = parts::split_flat(&boxes)
-    {
-        groups = Vec::from(split);
-    }
+    // A floor apart where the walk's beam is thin enough for rays leaving
+    // it to miss its flat bounds.
+    let groups =
+        parts::partition_with_floor(&boxes, &bounds, params.flat_part && prims.wide_hits());
     let whole = groups.len() == 1;
     let mut out = Out::new();
     let mut parts = Vec::with_capacity(groups.len());
