@@ -9,7 +9,9 @@ use std::time::Duration;
 pub struct TraversalCounters {
     /// Cells (grids) or nodes (trees) visited.
     pub nodes: u64,
-    /// Primitive intersection or overlap tests run.
+    /// Primitive intersection or overlap tests run. In a packed layout
+    /// ([`crate::packed`]) only the tests its block test could not settle
+    /// count: the primitives a block test rejects are not.
     pub prims: u64,
 }
 

@@ -52,6 +52,7 @@ mod hit;
 mod mailbox;
 mod mesh;
 pub mod moller_trumbore;
+pub mod packed;
 pub mod parts;
 mod primitive;
 mod ray;

@@ -195,6 +195,11 @@ impl<T: Real> PrimitiveSet<T> for TriangleMesh<T> {
         true
     }
 
+    #[inline]
+    fn watertight_triangle(&self, i: usize) -> Option<[Vec3<T>; 3]> {
+        Some(self.triangle(i))
+    }
+
     fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
         triangle_overlaps_boxes(self.triangle(i), boxes, out);
     }

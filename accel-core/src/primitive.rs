@@ -5,7 +5,7 @@
 //! [`PrimitiveSet::intersect`], which is what makes their answers bit-for-bit
 //! identical to [`crate::BruteForce`].
 
-use crate::{Aabb, PreparedRay, PrimHit, Real};
+use crate::{Aabb, PreparedRay, PrimHit, Real, Vec3};
 
 /// One primitive that knows its bounds and how a ray meets it.
 ///
@@ -34,6 +34,15 @@ pub trait Primitive<T: Real>: Sync {
     /// [`PrimitiveSet::wide_hits`] says; `false` (always safe) unless the
     /// test computes in the wide type from `T`'s exact inputs.
     const WIDE_HITS: bool = false;
+
+    /// The vertices, when the primitive is a triangle whose
+    /// [`Primitive::intersect`] is exactly
+    /// [`crate::triangle::intersect_triangle`] with them: a structure may
+    /// then test it in packed blocks ([`crate::packed`]). `None` (the
+    /// default) otherwise.
+    fn watertight_triangle(&self) -> Option<[Vec3<T>; 3]> {
+        None
+    }
 
     /// Whether the primitive meets the closed box `b`. The default tests the
     /// bounds; shapes with an exact test override it, so that long thin shapes
@@ -111,6 +120,16 @@ pub trait PrimitiveSet<T: Real>: Sync {
         false
     }
 
+    /// The vertices of primitive `i`, when it is a triangle whose
+    /// [`PrimitiveSet::intersect`] is exactly
+    /// [`crate::triangle::intersect_triangle`] with them, as
+    /// [`Primitive::watertight_triangle`]. A set answers for all its
+    /// primitives alike. `None` (the default) keeps structures indexed.
+    fn watertight_triangle(&self, i: usize) -> Option<[Vec3<T>; 3]> {
+        let _ = i;
+        None
+    }
+
     /// [`PrimitiveSet::overlaps_box`] of primitive `i` for each of `boxes`,
     /// written to the same place in `out` (as long as `boxes`), as
     /// [`Primitive::overlaps_boxes`]: one call per primitive lets a set
@@ -150,6 +169,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for [P] {
         P::WIDE_HITS
     }
     #[inline]
+    fn watertight_triangle(&self, i: usize) -> Option<[Vec3<T>; 3]> {
+        self[i].watertight_triangle()
+    }
+    #[inline]
     fn len(&self) -> usize {
         <[P]>::len(self)
     }
@@ -183,6 +206,10 @@ impl<T: Real, P: Primitive<T>> PrimitiveSet<T> for Vec<P> {
     #[inline]
     fn wide_hits(&self) -> bool {
         P::WIDE_HITS
+    }
+    #[inline]
+    fn watertight_triangle(&self, i: usize) -> Option<[Vec3<T>; 3]> {
+        self[i].watertight_triangle()
     }
     #[inline]
     fn len(&self) -> usize {

@@ -109,7 +109,7 @@ fn watertight<T: Real>(
 /// passes outside an edge. Bitwise, not short-circuit: one branch for the
 /// caller instead of up to six, each on a sign no branch predictor knows.
 #[inline(always)]
-fn opposite_signs(u: f64, v: f64, w: f64) -> bool {
+pub(crate) fn opposite_signs(u: f64, v: f64, w: f64) -> bool {
     ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0))
 }
 
@@ -121,7 +121,7 @@ fn opposite_signs(u: f64, v: f64, w: f64) -> bool {
 /// than twice that, plus an absolute term for products that underflow.
 /// Non-finite products never pass (the comparison is false for NaN and ∞).
 #[inline(always)]
-fn sure_sign(p: f64, q: f64) -> f64 {
+pub(crate) fn sure_sign(p: f64, q: f64) -> f64 {
     let r = p - q;
     if r.abs() > 2.0 * f64::EPSILON * (p.abs() + q.abs()) + f64::MIN_POSITIVE {
         r
@@ -597,6 +597,11 @@ impl<T: Real> Primitive<T> for Triangle<T> {
     /// The watertight test translates and shears in `f64` from the exact
     /// `T` inputs ([`intersect_triangle`]).
     const WIDE_HITS: bool = true;
+
+    #[inline]
+    fn watertight_triangle(&self) -> Option<[Vec3<T>; 3]> {
+        Some(self.vertices)
+    }
 
     /// The vertices' bounds; infinite when a vertex is not finite (min and
     /// max would drop a NaN), so that every build refuses the triangle.

@@ -4,6 +4,7 @@ use crate::blocks::Blocks;
 use crate::cells::GridGeometry;
 use crate::csr::{CellLists, CellVisitor};
 use crate::resolution::resolution;
+use accel_core::packed::{Layout, PackedTriangles};
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, bounds_union};
 use std::time::Instant;
 
@@ -32,6 +33,12 @@ pub struct GridParams<T> {
     /// [`BLOCKS_MIN_EMPTY_SHARE`] of the blocks are empty). They take a byte
     /// per 64 cells. Default true; the answers are the same either way.
     pub skip_empty_blocks: bool,
+    /// Whether cells' triangles are also kept in packed blocks, tested
+    /// several at once ([`Layout`]). Default [`Layout::Packed`]: on the 100k
+    /// sphere, camera, shadow and diffuse rays trace 1.09×, 1.13× and 1.09×
+    /// as fast as indexed (where the CPU has AVX2). The answers are the same
+    /// either way.
+    pub layout: Layout,
 }
 
 impl<T: Real> Default for GridParams<T> {
@@ -42,6 +49,7 @@ impl<T: Real> Default for GridParams<T> {
             max_cells: 1 << 28,
             max_references: 1 << 28,
             skip_empty_blocks: true,
+            layout: DEFAULT_LAYOUT,
         }
     }
 }
@@ -71,6 +79,7 @@ pub(crate) struct Built<T> {
     pub(crate) geometry: GridGeometry<T>,
     pub(crate) cells: CellLists,
     pub(crate) blocks: Option<Blocks<T>>,
+    pub(crate) packed: Option<PackedTriangles<T>>,
     pub(crate) stats: AccelStats,
 }
 
@@ -173,6 +182,9 @@ pub const BLOCKS_MIN_EMPTY_SHARE: f64 = 0.5;
 /// Blocks of `2^BLOCK_SHIFT` cells per axis.
 pub const BLOCK_SHIFT: u32 = 2;
 
+/// The default of [`GridParams::layout`].
+pub const DEFAULT_LAYOUT: Layout = Layout::Packed;
+
 /// Builds the geometry and cell lists of a grid over `prims`.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
@@ -216,8 +228,18 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let blocks = (params.skip_empty_blocks && geometry.cell_count() >= BLOCKS_MIN_CELLS)
         .then(|| Blocks::new(&geometry, &cells, BLOCK_SHIFT))
         .filter(|b| b.empty_share() >= BLOCKS_MIN_EMPTY_SHARE);
+    let offsets = cells.offsets();
+    let packed = PackedTriangles::new(
+        params.layout,
+        prims,
+        cells.refs(),
+        offsets
+            .windows(2)
+            .map(|w| (w[0] as usize, (w[1] - w[0]) as usize)),
+    );
     let bytes = cells.bytes()
         + blocks.as_ref().map_or(0, Blocks::bytes)
+        + packed.as_ref().map_or(0, PackedTriangles::memory_bytes)
         + (0..3)
             .map(|a| size_of_val(geometry.boundaries(a)))
             .sum::<usize>();
@@ -248,6 +270,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         geometry,
         cells,
         blocks,
+        packed,
         stats,
     })
 }

@@ -196,8 +196,16 @@ impl CellLists {
     #[inline]
     #[must_use]
     pub fn cell(&self, c: usize) -> &[u32] {
+        self.cell_at(c).1
+    }
+
+    /// [`CellLists::cell`], with where the list starts in
+    /// [`CellLists::refs`].
+    #[inline]
+    #[must_use]
+    pub fn cell_at(&self, c: usize) -> (usize, &[u32]) {
         let (start, end) = (self.offsets[c] as usize, self.offsets[c + 1] as usize);
-        &self.refs[start..end]
+        (start, &self.refs[start..end])
     }
 
     /// The offsets array (`cell_count + 1` entries).
@@ -245,21 +253,21 @@ impl CellLists {
         self
     }
 
-    /// [`CellLists::cell`], reading the cell's occupancy bit first: an empty
+    /// [`CellLists::cell_at`], reading the cell's occupancy bit first: an empty
     /// cell is answered without touching the offsets, from an array 32 times
     /// smaller. Lists without the bits ([`CellLists::has_occupied_bits`])
     /// take the offsets for every cell.
     #[inline]
     #[must_use]
-    pub fn occupied_cell(&self, c: usize) -> &[u32] {
+    pub fn occupied_cell(&self, c: usize) -> (usize, &[u32]) {
         // `get` is `None` when the lists keep no bits (or `c` is out of
         // range, which `cell` then reports).
         if let Some(word) = self.occupied.get(c / 64)
             && word >> (c % 64) & 1 == 0
         {
-            return &[];
+            return (0, &[]);
         }
-        self.cell(c)
+        self.cell_at(c)
     }
 
     /// Whether any of the `len` cells from `start` on holds a reference: two
@@ -794,8 +802,8 @@ mod tests {
             assert!(with_bits.has_occupied_bits());
             for c in 0..cells {
                 let want = expected.get(&c).map_or(&[][..], Vec::as_slice);
-                assert_eq!(with_bits.occupied_cell(c), want, "cell {c}");
-                assert_eq!(lists.occupied_cell(c), want, "cell {c} without bits");
+                assert_eq!(with_bits.occupied_cell(c).1, want, "cell {c}");
+                assert_eq!(lists.occupied_cell(c).1, want, "cell {c} without bits");
             }
             assert_eq!(with_bits.bytes(), lists.bytes() + cells.div_ceil(64) * 8);
         }

@@ -4,6 +4,7 @@ use crate::blocks::Blocks;
 use crate::build::{GridParams, build};
 use crate::cells::GridGeometry;
 use crate::csr::CellLists;
+use accel_core::packed::PackedTriangles;
 use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
 
 /// A uniform grid over a primitive set (see the crate docs).
@@ -17,6 +18,9 @@ pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     /// Blocks of cells for skipping empty space ([`crate::blocks`]), on
     /// grids large enough for them to pay.
     pub(crate) blocks: Option<Blocks<T>>,
+    /// The cells' triangles in packed blocks, when the layout asks for
+    /// them and the primitives are watertight triangles.
+    pub(crate) packed: Option<PackedTriangles<T>>,
     pub(crate) stats: AccelStats,
     /// True when the grid covers nothing (no primitive was placed).
     pub(crate) empty: bool,
@@ -44,6 +48,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
             geometry: built.geometry,
             cells: built.cells,
             blocks: built.blocks,
+            packed: built.packed,
             stats: built.stats,
         };
         #[cfg(debug_assertions)]

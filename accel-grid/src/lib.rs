@@ -58,7 +58,7 @@ mod grid;
 pub mod resolution;
 mod traverse;
 
-pub use build::GridParams;
+pub use build::{DEFAULT_LAYOUT, GridParams};
 pub use grid::Grid;
 
 /// The README's library example, compiled and run as a doc test.

@@ -2,6 +2,7 @@
 
 use crate::dda::{BeamWalk, Step};
 use crate::grid::Grid;
+use accel_core::packed::for_each_candidate;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
     TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
@@ -9,19 +10,21 @@ use accel_core::{
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
     /// The references of cell `c`, by its occupancy bit first if `BITS`
-    /// (a large grid's, see [`crate::build::OCCUPIED_BITS_MIN_CELLS`]).
+    /// (a large grid's, see [`crate::build::OCCUPIED_BITS_MIN_CELLS`]),
+    /// with where they start in the reference array.
     #[inline(always)]
-    fn cell<const BITS: bool>(&self, c: usize) -> &[u32] {
+    fn cell<const BITS: bool>(&self, c: usize) -> (usize, &[u32]) {
         if BITS {
             self.cells.occupied_cell(c)
         } else {
-            self.cells.cell(c)
+            self.cells.cell_at(c)
         }
     }
 
-    /// Calls `f` with the reference list of every cell a walk step opened.
+    /// Calls `f` with the reference list (and its start) of every cell a
+    /// walk step opened.
     #[inline]
-    fn for_step<const BITS: bool>(&self, step: Step, f: impl FnMut(&[u32])) {
+    fn for_step<const BITS: bool>(&self, step: Step, f: impl FnMut((usize, &[u32]))) {
         match step {
             Step::Cell(c) => {
                 let mut f = f;
@@ -104,21 +107,21 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let mut cells = Step::Cells(first);
         loop {
             let mut empty = true;
-            self.for_step::<BITS>(cells, |refs| {
+            self.for_step::<BITS>(cells, |(start, refs)| {
                 counter.node();
                 if BLOCKS {
                     empty &= refs.is_empty();
                 }
-                for &p in refs {
-                    if mailbox.seen(p) {
-                        continue;
+                for_each_candidate(self.packed.as_ref(), start, refs, &tr.prepared, |p| {
+                    if !mailbox.seen(p) {
+                        counter.prim();
+                        let t_max = best.map_or(ray.t_max, |b| b.t);
+                        if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
+                            best = nearer(best, Hit::new(p, h));
+                        }
                     }
-                    counter.prim();
-                    let t_max = best.map_or(ray.t_max, |b| b.t);
-                    if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
-                        best = nearer(best, Hit::new(p, h));
-                    }
-                }
+                    false
+                });
             });
             let limit = match best {
                 Some(b) => tr.t_end.min(b.t + tr.t_tol),
@@ -150,21 +153,23 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         loop {
             let mut found = false;
             let mut empty = true;
-            self.for_step::<BITS>(cells, |refs| {
+            self.for_step::<BITS>(cells, |(start, refs)| {
                 counter.node();
                 if BLOCKS {
                     empty &= refs.is_empty();
                 }
-                for &p in refs {
-                    if found || mailbox.seen(p) {
-                        continue;
+                if found {
+                    return;
+                }
+                found = for_each_candidate(self.packed.as_ref(), start, refs, &tr.prepared, |p| {
+                    if mailbox.seen(p) {
+                        return false;
                     }
                     counter.prim();
-                    found = self
-                        .prims
+                    self.prims
                         .intersect(p as usize, &tr.prepared, ray.t_max)
-                        .is_some();
-                }
+                        .is_some()
+                });
             });
             if found {
                 return Ok(true);

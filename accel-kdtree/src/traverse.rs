@@ -20,6 +20,7 @@
 use crate::build::{KdPart, decode_split};
 use crate::reach::node_beam;
 use crate::tree::KdTree;
+use accel_core::packed::{PackedTriangles, for_each_candidate};
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
     TraversalCounters, TraversalRay, Vec3, nearer, region_matches, region_search_box,
@@ -33,13 +34,15 @@ const STACK: usize = crate::KdTreeParams::MAX_DEPTH as usize;
 trait Visitor<T> {
     /// Nodes entered after this parameter are skipped.
     fn cutoff(&self) -> T;
-    /// Tests a leaf's primitives; `true` ends the walk.
-    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool;
+    /// Tests a leaf's primitives (starting at `start` of the reference
+    /// array); `true` ends the walk.
+    fn leaf<C: CostCounter>(&mut self, start: usize, prims: &[u32], counter: &mut C) -> bool;
 }
 
 /// The nearest hit.
 struct Nearest<'q, T: Real, P: ?Sized> {
     prims: &'q P,
+    packed: Option<&'q PackedTriangles<T>>,
     tr: &'q TraversalRay<T>,
     mailbox: Mailbox,
     best: Option<Hit<T>>,
@@ -52,17 +55,18 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
     }
 
     #[inline]
-    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool {
-        for &p in prims {
-            if self.mailbox.seen(p) {
-                continue;
+    fn leaf<C: CostCounter>(&mut self, start: usize, prims: &[u32], counter: &mut C) -> bool {
+        let tr = self.tr;
+        for_each_candidate(self.packed, start, prims, &tr.prepared, |p| {
+            if !self.mailbox.seen(p) {
+                counter.prim();
+                let t_max = self.best.map_or(tr.ray().t_max, |b| b.t);
+                if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
+                    self.best = nearer(self.best, Hit::new(p, h));
+                }
             }
-            counter.prim();
-            let t_max = self.best.map_or(self.tr.ray().t_max, |b| b.t);
-            if let Some(h) = self.prims.intersect(p as usize, &self.tr.prepared, t_max) {
-                self.best = nearer(self.best, Hit::new(p, h));
-            }
-        }
+            false
+        });
         false
     }
 }
@@ -70,6 +74,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
 /// Any hit.
 struct AnyHit<'q, T: Real, P: ?Sized> {
     prims: &'q P,
+    packed: Option<&'q PackedTriangles<T>>,
     tr: &'q TraversalRay<T>,
     mailbox: Mailbox,
     found: bool,
@@ -82,23 +87,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
     }
 
     #[inline]
-    fn leaf<C: CostCounter>(&mut self, prims: &[u32], counter: &mut C) -> bool {
-        let t_max = self.tr.ray().t_max;
-        for &p in prims {
+    fn leaf<C: CostCounter>(&mut self, start: usize, prims: &[u32], counter: &mut C) -> bool {
+        let tr = self.tr;
+        let t_max = tr.ray().t_max;
+        self.found = for_each_candidate(self.packed, start, prims, &tr.prepared, |p| {
             if self.mailbox.seen(p) {
-                continue;
+                return false;
             }
             counter.prim();
-            if self
-                .prims
-                .intersect(p as usize, &self.tr.prepared, t_max)
+            self.prims
+                .intersect(p as usize, &tr.prepared, t_max)
                 .is_some()
-            {
-                self.found = true;
-                return true;
-            }
-        }
-        false
+        });
+        self.found
     }
 }
 
@@ -270,9 +271,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                         t0 = far_t0;
                         continue;
                     }
-                } else if v.leaf(self.leaf_primitives(node), counter) {
-                    return;
                 } else {
+                    let (start, prims) = self.leaf_list(node);
+                    if v.leaf(start, prims, counter) {
+                        return;
+                    }
                     cutoff = v.cutoff();
                 }
             }
@@ -332,6 +335,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         };
         let mut v = Nearest {
             prims: self.prims,
+            packed: self.packed.as_ref(),
             tr: &tr,
             mailbox: Mailbox::new(),
             best,
@@ -361,6 +365,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
         };
         let mut v = AnyHit {
             prims: self.prims,
+            packed: self.packed.as_ref(),
             tr: &tr,
             mailbox: Mailbox::new(),
             found: false,

@@ -4,6 +4,7 @@ use crate::build::{KdPart, Out, build, decode_split, tree_stats};
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
 use crate::reach::{narrowing_pays, node_reaches};
+use accel_core::packed::PackedTriangles;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
 use std::sync::OnceLock;
 use std::time::Duration;
@@ -22,6 +23,9 @@ pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     /// Per node, how far its primitives reach ([`crate::reach`]); empty
     /// where narrowing the beam would not pay ([`narrowing_pays`]).
     pub(crate) reach: Vec<T>,
+    /// The leaves' triangles in packed blocks, when the layout asks for
+    /// them and the primitives are watertight triangles.
+    pub(crate) packed: Option<PackedTriangles<T>>,
     /// The scene's bounds (every part's box lies inside).
     pub(crate) bounds: Aabb<T>,
     pub(crate) parts: Vec<KdPart<T>>,
@@ -80,6 +84,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             refs,
             splits,
             reach: Vec::new(),
+            packed: None,
             bounds: built.bounds,
             first: built.parts[0],
             parts: built.parts,
@@ -93,6 +98,15 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
         if tree.parts.len() == 1 && narrowing_pays(&tree) {
             tree.reach = node_reaches(&tree);
         }
+        tree.packed = PackedTriangles::new(
+            params.layout,
+            prims,
+            &tree.refs,
+            tree.nodes
+                .iter()
+                .filter(|n| n.is_leaf() && n.prim_count() > 1)
+                .map(|n| (n.leaf_payload() as usize, n.prim_count() as usize)),
+        );
         #[cfg(debug_assertions)]
         if let Err(e) = tree.validate() {
             panic!("kd-tree invariant broken after build: {e}");
@@ -119,7 +133,11 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
             stats.bytes = self.nodes.capacity() * size_of::<KdNode>()
                 + self.refs.capacity() * size_of::<u32>()
                 + self.splits.capacity() * size_of::<T>()
-                + self.reach.capacity() * size_of::<T>();
+                + self.reach.capacity() * size_of::<T>()
+                + self
+                    .packed
+                    .as_ref()
+                    .map_or(0, PackedTriangles::memory_bytes);
             stats
         })
     }
@@ -153,12 +171,20 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
     #[inline]
     #[must_use]
     pub fn leaf_primitives<'s>(&'s self, leaf: &'s KdNode) -> &'s [u32] {
+        self.leaf_list(leaf).1
+    }
+
+    /// [`KdTree::leaf_primitives`], with where they start in
+    /// [`KdTree::references`] (0 for a leaf of fewer than two, which holds
+    /// its primitive itself).
+    #[inline]
+    pub(crate) fn leaf_list<'s>(&'s self, leaf: &'s KdNode) -> (usize, &'s [u32]) {
         match leaf.prim_count() {
-            0 => &[],
-            1 => core::slice::from_ref(leaf.payload_ref()),
+            0 => (0, &[]),
+            1 => (0, core::slice::from_ref(leaf.payload_ref())),
             c => {
                 let at = leaf.leaf_payload() as usize;
-                &self.refs[at..at + c as usize]
+                (at, &self.refs[at..at + c as usize])
             }
         }
     }

@@ -1,9 +1,11 @@
 //! The octree: its parts, construction and accessors.
 
 use crate::build::build;
+use crate::node::entry;
 use crate::node::{LevelStats, Node};
 use crate::params::OctreeParams;
 use crate::stats::{accel_stats, level_stats};
+use accel_core::packed::PackedTriangles;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
 use accel_grid::cells::GridGeometry;
 use accel_grid::csr::CellLists;
@@ -25,6 +27,9 @@ pub struct Octree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     pub(crate) bounds: Aabb<T>,
     /// Every grid's cells: primitive lists and child links.
     pub(crate) cells: CellLists,
+    /// The cells' triangles in packed blocks, when the layout asks for
+    /// them and the primitives are watertight triangles.
+    pub(crate) packed: Option<PackedTriangles<T>>,
     pub(crate) levels: Vec<LevelStats>,
     pub(crate) params: OctreeParams,
     pub(crate) stats: AccelStats,
@@ -54,6 +59,15 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
         let start = Instant::now();
         let built = build(prims, params)?;
         let levels = level_stats(&built.nodes, &built.cells);
+        let packed = PackedTriangles::new(
+            params.layout,
+            prims,
+            built.cells.refs(),
+            (0..built.cells.cell_count()).map(|c| {
+                let (start, refs) = built.cells.cell_at(c);
+                (start, entry(refs).prims.len())
+            }),
+        );
         let bytes = built.nodes.capacity() * size_of::<Node<T>>()
             + built
                 .nodes
@@ -65,6 +79,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
                 })
                 .sum::<usize>()
             + built.cells.bytes()
+            + packed.as_ref().map_or(0, PackedTriangles::memory_bytes)
             + levels.capacity() * size_of::<LevelStats>();
         let stats = accel_stats(
             prims.len(),
@@ -85,6 +100,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
             empty: built.cells.reference_count() == 0,
             nodes: built.nodes,
             cells: built.cells,
+            packed,
             levels,
             params: params.clone(),
             stats,

@@ -1,6 +1,7 @@
 //! Build parameters: how many cells each grid gets, when a cell becomes a
 //! grid of its own, and the limits (depth, memory).
 
+use accel_core::packed::Layout;
 use accel_core::{Aabb, BuildError, Real};
 
 /// The deepest level below the root that [`OctreeParams::max_depth`] may ask
@@ -151,6 +152,11 @@ pub struct OctreeParams {
     /// floor then misses that root's flat box, tested with the wide type's
     /// thin beam, and walks no cell of it. Default `true`.
     pub flat_part: bool,
+    /// Whether cells' triangles are also kept in packed blocks, tested
+    /// several at once ([`Layout`]). Default [`Layout::Indexed`]: packed
+    /// cells traced 1.00–1.04× as fast on the 100k sphere but 0.84–0.95× on
+    /// the teapot in a stadium. The answers are the same either way.
+    pub layout: Layout,
 }
 
 impl Default for OctreeParams {
@@ -166,6 +172,7 @@ impl Default for OctreeParams {
             fit_children: true,
             max_bytes: 1 << 31,
             flat_part: true,
+            layout: Layout::Indexed,
         }
     }
 }

@@ -17,6 +17,7 @@
 
 use crate::node::{Entry, Node, entry};
 use crate::octree::Octree;
+use accel_core::packed::for_each_candidate;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PreparedRay, PrimitiveSet,
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalCounters, TraversalRay, nearer,
@@ -145,17 +146,19 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, '
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) {
         self.q.counter.node();
         let tree = self.q.tree;
-        let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
-        for &p in prims {
-            if self.q.mailbox.seen(p) {
-                continue;
+        let (start, refs) = tree.cells.cell_at(node.cell_index(c));
+        let Entry { prims, child } = entry(refs);
+        let (q, best) = (&mut self.q, &mut self.best);
+        for_each_candidate(tree.packed.as_ref(), start, prims, &q.prepared, |p| {
+            if !q.mailbox.seen(p) {
+                q.counter.prim();
+                let t_max = best.map_or(q.prepared.ray.t_max, |b| b.t);
+                if let Some(h) = tree.prims.intersect(p as usize, &q.prepared, t_max) {
+                    *best = nearer(*best, Hit::new(p, h));
+                }
             }
-            self.q.counter.prim();
-            let t_max = self.best.map_or(self.q.prepared.ray.t_max, |b| b.t);
-            if let Some(h) = tree.prims.intersect(p as usize, &self.q.prepared, t_max) {
-                self.best = nearer(self.best, Hit::new(p, h));
-            }
-        }
+            false
+        });
         if let Some(child) = child {
             let child = &tree.nodes[child];
             let beam = narrowed(tr, child, self.q.inv_max_d);
@@ -204,20 +207,20 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) -> bool {
         self.q.counter.node();
         let tree = self.q.tree;
-        let Entry { prims, child } = entry(tree.cells.cell(node.cell_index(c)));
-        let t_max = self.q.prepared.ray.t_max;
-        for &p in prims {
-            if self.q.mailbox.seen(p) {
-                continue;
+        let (start, refs) = tree.cells.cell_at(node.cell_index(c));
+        let Entry { prims, child } = entry(refs);
+        let q = &mut self.q;
+        let t_max = q.prepared.ray.t_max;
+        if for_each_candidate(tree.packed.as_ref(), start, prims, &q.prepared, |p| {
+            if q.mailbox.seen(p) {
+                return false;
             }
-            self.q.counter.prim();
-            if tree
-                .prims
-                .intersect(p as usize, &self.q.prepared, t_max)
+            q.counter.prim();
+            tree.prims
+                .intersect(p as usize, &q.prepared, t_max)
                 .is_some()
-            {
-                return true;
-            }
+        }) {
+            return true;
         }
         child.is_some_and(|child| {
             let child = &tree.nodes[child];

@@ -4,6 +4,7 @@
 //! [`AccelConfig`] variant and one arm of [`build_config`]. `--accel auto`
 //! asks [`crate::choose`].
 
+use accel_core::packed::Layout;
 use accel_core::{Accelerator, BruteForce, BuildError, PrimitiveSet, Real};
 use accel_grid::{Grid, GridParams};
 use accel_kdtree::{KdTree, KdTreeParams};
@@ -114,14 +115,21 @@ pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     let kind = config.kind();
     let wrap = |cause| AccelError::Build { kind, cause };
     Ok(match config {
-        AccelConfig::Grid { density } => {
-            Box::new(Grid::with_params(prims, &GridParams::with_density(*density)).map_err(wrap)?)
+        AccelConfig::Grid { density, layout } => {
+            let params = GridParams {
+                layout: *layout,
+                ..GridParams::with_density(*density)
+            };
+            Box::new(Grid::with_params(prims, &params).map_err(wrap)?)
         }
         AccelConfig::Octree(p) => Box::new(Octree::with_params(prims, p).map_err(wrap)?),
         AccelConfig::KdTree(p) => Box::new(KdTree::with_params(prims, p).map_err(wrap)?),
         AccelConfig::Brute => Box::new(BruteForce::new(prims).map_err(wrap)?),
     })
 }
+
+/// The grid's default layout ([`GridParams::layout`]).
+pub const GRID_LAYOUT: Layout = accel_grid::DEFAULT_LAYOUT;
 
 /// An accelerator and its build parameters: the structure-quality dial.
 ///
@@ -136,6 +144,8 @@ pub enum AccelConfig {
     Grid {
         /// Cells per object along each axis.
         density: f64,
+        /// Whether cells' triangles are also packed ([`Layout`]).
+        layout: Layout,
     },
     /// An octree of nested grids.
     Octree(OctreeParams),
@@ -146,11 +156,20 @@ pub enum AccelConfig {
 }
 
 impl AccelConfig {
+    /// A grid of density `m` with the default layout.
+    #[must_use]
+    pub fn grid(density: f64) -> Self {
+        Self::Grid {
+            density,
+            layout: GRID_LAYOUT,
+        }
+    }
+
     /// The structure with its default parameters.
     #[must_use]
     pub fn default_for(kind: AccelKind) -> Self {
         match kind {
-            AccelKind::Grid => Self::Grid { density: 2.0 },
+            AccelKind::Grid => Self::grid(2.0),
             AccelKind::Octree => Self::Octree(OctreeParams::default()),
             AccelKind::KdTree => Self::KdTree(KdTreeParams::default()),
             AccelKind::Brute => Self::Brute,
@@ -173,30 +192,38 @@ impl AccelConfig {
     #[must_use]
     pub fn label(&self) -> String {
         match self {
-            Self::Grid { density } => format!("grid m={density}"),
-            Self::Octree(p) => match octree_preset_name(p) {
-                Some("default") => "octree".to_owned(),
-                Some(name) => format!("octree {name}"),
-                None => format!(
-                    "octree t={} d={}{}",
-                    p.split_threshold,
-                    p.max_depth,
-                    flat_label(p.flat_part)
-                ),
-            },
-            Self::KdTree(p) => match kdtree_preset_name(p) {
-                Some("default") => "kdtree".to_owned(),
-                Some(name) => format!("kdtree {name}"),
-                None => format!(
-                    "kdtree ci={} ct={} eb={}{}{}{}",
-                    p.intersect_cost,
-                    p.traversal_cost,
-                    p.empty_bonus,
-                    binning_label(p),
-                    depth_label(p),
-                    flat_label(p.flat_part)
-                ),
-            },
+            Self::Grid { density, layout } => {
+                format!("grid m={density}{}", layout_label(*layout, GRID_LAYOUT))
+            }
+            Self::Octree(p) => {
+                let shape = match octree_preset_name(p) {
+                    Some("default") => "octree".to_owned(),
+                    Some(name) => format!("octree {name}"),
+                    None => format!(
+                        "octree t={} d={}{}",
+                        p.split_threshold,
+                        p.max_depth,
+                        flat_label(p.flat_part)
+                    ),
+                };
+                shape + &layout_label(p.layout, OctreeParams::default().layout)
+            }
+            Self::KdTree(p) => {
+                let shape = match kdtree_preset_name(p) {
+                    Some("default") => "kdtree".to_owned(),
+                    Some(name) => format!("kdtree {name}"),
+                    None => format!(
+                        "kdtree ci={} ct={} eb={}{}{}{}",
+                        p.intersect_cost,
+                        p.traversal_cost,
+                        p.empty_bonus,
+                        binning_label(p),
+                        depth_label(p),
+                        flat_label(p.flat_part)
+                    ),
+                };
+                shape + &layout_label(p.layout, KdTreeParams::default().layout)
+            }
             Self::Brute => "brute".to_owned(),
         }
     }
@@ -212,6 +239,15 @@ fn binning_label(p: &KdTreeParams) -> String {
         String::new()
     } else {
         format!(" binned>{}/{}", p.binned_above, p.bins)
+    }
+}
+
+/// The layout when not the structure's default: ` indexed`, ` packed`.
+fn layout_label(layout: Layout, default: Layout) -> String {
+    if layout == default {
+        String::new()
+    } else {
+        format!(" {}", layout.name())
     }
 }
 
@@ -264,16 +300,30 @@ pub fn kdtree_preset(name: &str) -> Option<KdTreeParams> {
     })
 }
 
+/// The name of the preset `p` is, whatever its layout.
 fn octree_preset_name(p: &OctreeParams) -> Option<&'static str> {
-    OCTREE_PRESETS
-        .into_iter()
-        .find(|n| octree_preset(n).as_ref() == Some(p))
+    OCTREE_PRESETS.into_iter().find(|n| {
+        octree_preset(n).is_some_and(|preset| {
+            preset
+                == OctreeParams {
+                    layout: preset.layout,
+                    ..p.clone()
+                }
+        })
+    })
 }
 
+/// The name of the preset `p` is, whatever its layout.
 fn kdtree_preset_name(p: &KdTreeParams) -> Option<&'static str> {
-    KDTREE_PRESETS
-        .into_iter()
-        .find(|n| kdtree_preset(n).as_ref() == Some(p))
+    KDTREE_PRESETS.into_iter().find(|n| {
+        kdtree_preset(n).is_some_and(|preset| {
+            preset
+                == KdTreeParams {
+                    layout: preset.layout,
+                    ..p.clone()
+                }
+        })
+    })
 }
 
 #[cfg(test)]
@@ -320,7 +370,7 @@ mod tests {
             .intersect(&ray)
             .unwrap();
         let mut labels = Vec::new();
-        let configs = [AccelConfig::Grid { density: 3.0 }]
+        let configs = [AccelConfig::grid(3.0)]
             .into_iter()
             .chain(OCTREE_PRESETS.map(|n| AccelConfig::Octree(octree_preset(n).unwrap())))
             .chain(KDTREE_PRESETS.map(|n| AccelConfig::KdTree(kdtree_preset(n).unwrap())));
@@ -380,7 +430,7 @@ mod tests {
         });
         let err = build_config(&bad, &mesh).err().unwrap().to_string();
         assert!(err.contains("depth_base"), "{err}");
-        let err = build_config(&AccelConfig::Grid { density: -1.0 }, &mesh)
+        let err = build_config(&AccelConfig::grid(-1.0), &mesh)
             .err()
             .unwrap()
             .to_string();
@@ -430,13 +480,10 @@ mod tests {
                 differ > 0,
                 "the tests never differ: the check proves nothing"
             );
-            let configs = [
-                AccelConfig::Grid { density: 1.0 },
-                AccelConfig::Grid { density: 3.0 },
-            ]
-            .into_iter()
-            .chain(OCTREE_PRESETS.map(|n| AccelConfig::Octree(octree_preset(n).unwrap())))
-            .chain(KDTREE_PRESETS.map(|n| AccelConfig::KdTree(kdtree_preset(n).unwrap())));
+            let configs = [AccelConfig::grid(1.0), AccelConfig::grid(3.0)]
+                .into_iter()
+                .chain(OCTREE_PRESETS.map(|n| AccelConfig::Octree(octree_preset(n).unwrap())))
+                .chain(KDTREE_PRESETS.map(|n| AccelConfig::KdTree(kdtree_preset(n).unwrap())));
             for config in configs {
                 let accel = build_config(&config, &fast).unwrap();
                 for (r, want) in rays32.iter().zip(&reference) {

@@ -80,7 +80,7 @@
 //! depend on the noise.
 
 use crate::accel::{AccelConfig, AccelError, AccelKind, build_config};
-use accel_core::{Aabb, PreparedRay, PrimHit};
+use accel_core::{Aabb, PreparedRay, PrimHit, Vec3};
 use accel_core::{Accelerator, PrimitiveSet, QueryError, Ray, Real};
 use accel_kdtree::KdTreeParams;
 use accel_octree::OctreeParams;
@@ -265,12 +265,8 @@ pub enum ChooseError {
 #[must_use]
 pub fn candidates() -> [AccelConfig; 5] {
     [
-        AccelConfig::Grid {
-            density: GRID_DENSITY,
-        },
-        AccelConfig::Grid {
-            density: FINE_GRID_DENSITY,
-        },
+        AccelConfig::grid(GRID_DENSITY),
+        AccelConfig::grid(FINE_GRID_DENSITY),
         AccelConfig::Octree(OctreeParams::two_level()),
         AccelConfig::Octree(OctreeParams::default()),
         AccelConfig::KdTree(KdTreeParams::fast_build()),
@@ -760,6 +756,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> PrimitiveSet<T> for Subsample<'_, T, 
     fn wide_hits(&self) -> bool {
         self.prims.wide_hits()
     }
+    fn watertight_triangle(&self, i: usize) -> Option<[Vec3<T>; 3]> {
+        self.prims.watertight_triangle(self.index[i])
+    }
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
         self.prims.clipped_bounds(self.index[i], b)
     }
@@ -1154,7 +1153,7 @@ mod tests {
             .unwrap();
             assert_eq!(first, "octree", "the probe is made without the grid");
             let grid = &c.estimates[0];
-            assert_eq!(grid.config, AccelConfig::Grid { density: 1.0 });
+            assert_eq!(grid.config, AccelConfig::grid(1.0));
             let Status::Skipped(Skip::FullCell(refs)) = grid.status else {
                 panic!("{grid:?}");
             };

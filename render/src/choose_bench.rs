@@ -115,7 +115,7 @@ pub const BUDGETS: [Budget; 2] = [
 pub fn candidates() -> Vec<AccelConfig> {
     let mut out: Vec<AccelConfig> = [1.0, 1.5, 2.0, 3.0]
         .into_iter()
-        .map(|density| AccelConfig::Grid { density })
+        .map(AccelConfig::grid)
         .collect();
     out.extend(
         crate::accel::OCTREE_PRESETS

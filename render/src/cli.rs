@@ -4,9 +4,10 @@
 //! refused before any work starts (see [`limits`]).
 
 use crate::accel::{
-    AccelChoice, AccelConfig, AccelKind, KDTREE_PRESETS, OCTREE_PRESETS, kdtree_preset,
-    octree_preset,
+    AccelChoice, AccelConfig, AccelKind, GRID_LAYOUT, KDTREE_PRESETS, OCTREE_PRESETS,
+    kdtree_preset, octree_preset,
 };
+use accel_core::packed::Layout;
 use accel_core::spawn::SpawnOffset;
 use accel_core::{Real, TriangleTest};
 use clap::builder::PossibleValuesParser;
@@ -213,6 +214,26 @@ impl TestChoice {
     }
 }
 
+/// How cells and leaves keep their triangles, as `--layout` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LayoutChoice {
+    /// Copied into blocks of four, tested together with SIMD.
+    Packed,
+    /// Indices into the mesh only: the least memory.
+    Indexed,
+}
+
+impl LayoutChoice {
+    /// The library's name for it.
+    #[must_use]
+    pub const fn layout(self) -> Layout {
+        match self {
+            Self::Packed => Layout::Packed,
+            Self::Indexed => Layout::Indexed,
+        }
+    }
+}
+
 /// Where secondary rays start, as `--spawn` names it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum SpawnChoice {
@@ -240,6 +261,12 @@ pub struct DialArgs {
     /// The offset of `--spawn epsilon`, in scene units.
     #[arg(long, default_value_t = 1e-4, value_parser = epsilon_parser, allow_negative_numbers = true)]
     pub epsilon: f64,
+    /// How the structures keep the triangles of their cells and leaves:
+    /// packed in blocks tested four at a time with SIMD (more memory), or
+    /// indexed into the mesh only [default: packed for the grid, indexed
+    /// for the octree and the kD-tree, the faster of each].
+    #[arg(long, value_enum)]
+    pub layout: Option<LayoutChoice>,
     /// Grid density m (about m³ cells per object; default 2). Needs --accel grid.
     #[arg(long, value_name = "M", value_parser = density_parser, allow_negative_numbers = true)]
     pub grid_density: Option<f64>,
@@ -399,6 +426,7 @@ impl DialArgs {
         match kind {
             AccelKind::Grid => AccelConfig::Grid {
                 density: self.grid_density.unwrap_or(2.0),
+                layout: self.layout.map_or(GRID_LAYOUT, LayoutChoice::layout),
             },
             AccelKind::Octree => {
                 let mut p = self
@@ -414,6 +442,9 @@ impl DialArgs {
                 }
                 if self.octree_no_flat_part {
                     p.flat_part = false;
+                }
+                if let Some(l) = self.layout {
+                    p.layout = l.layout();
                 }
                 AccelConfig::Octree(p)
             }
@@ -443,6 +474,9 @@ impl DialArgs {
                 }
                 if self.kdtree_no_flat_part {
                     p.flat_part = false;
+                }
+                if let Some(l) = self.layout {
+                    p.layout = l.layout();
                 }
                 AccelConfig::KdTree(p)
             }
@@ -645,6 +679,21 @@ mod tests {
             .check_structure_options(&[AccelKind::KdTree], false)
             .unwrap_err();
         assert!(err.contains("--octree-no-flat-part"), "{err}");
+        // --layout turns every structure's layout; unset, each keeps its own
+        // default, and labels name only a layout that differs from it.
+        let l = parse(&["--accel", "grid"]).unwrap().render.dials;
+        assert_eq!(l.config(AccelKind::Grid).label(), "grid m=2");
+        assert_eq!(l.config(AccelKind::KdTree).label(), "kdtree");
+        let l = parse(&["--layout", "indexed"]).unwrap().render.dials;
+        assert_eq!(l.config(AccelKind::Grid).label(), "grid m=2 indexed");
+        assert_eq!(l.config(AccelKind::Octree).label(), "octree");
+        let l = parse(&["--layout", "packed", "--kdtree-preset", "pbrt"])
+            .unwrap()
+            .render
+            .dials;
+        assert_eq!(l.config(AccelKind::KdTree).label(), "kdtree pbrt packed");
+        assert_eq!(l.config(AccelKind::Octree).label(), "octree packed");
+        assert!(parse(&["--layout", "soa"]).is_err());
         assert!(parse(&["--accel", "kdtree", "--kdtree-binned-above", "lots"]).is_err());
         assert!(
             d.check_structure_options(&[AccelKind::KdTree], false)
@@ -672,7 +721,7 @@ mod tests {
         assert_eq!((p.split_threshold, p.max_depth), (4, 2));
         assert_eq!(
             parse(&[]).unwrap().render.dials.config(AccelKind::Grid),
-            AccelConfig::Grid { density: 2.0 }
+            AccelConfig::grid(2.0)
         );
         for bad in [
             &["--grid-density", "0"][..],

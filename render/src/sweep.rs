@@ -173,7 +173,7 @@ fn sweep_one<T: Real>(
     m: f64,
     repeats: u32,
 ) -> Result<SweepRow> {
-    let config = AccelConfig::Grid { density: m };
+    let config = AccelConfig::grid(m);
     let mut builds = Vec::new();
     let mut grid: Option<Box<dyn Accelerator<T> + '_>> = None;
     let start = Instant::now();

@@ -4,8 +4,11 @@
 //! [`accelerators`]: a name and a builder. Every suite (equivalence,
 //! extremes, watertightness, bad input, non-finite scenes, real meshes) runs
 //! over every entry, in `f32` and `f64`, for triangle meshes and for the
-//! user-defined [`crate::Mixed`] primitive.
+//! user-defined [`crate::Mixed`] primitive. Each structure is listed in
+//! both layouts ([`Layout`]: packed blocks and indexed lists), so that the
+//! SIMD block test is held to brute force too.
 
+use accel_core::packed::Layout;
 use accel_core::{
     Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Real, Vec3, bounds_union,
 };
@@ -41,6 +44,12 @@ pub fn accelerators<T: Real, P: PrimitiveSet<T> + ?Sized + 'static>() -> Vec<Ent
         entry("grid m=1", |p| boxed(Grid::with_params(p, &density(1.0)))),
         entry("grid m=2", |p| boxed(Grid::with_params(p, &density(2.0)))),
         entry("grid m=4", |p| boxed(Grid::with_params(p, &density(4.0)))),
+        entry("grid m=1 indexed", |p| {
+            boxed(Grid::with_params(
+                p,
+                &with_layout(density(1.0), Layout::Indexed),
+            ))
+        }),
         entry("grid region>scene", |p| boxed(enclosing_region_grid(p))),
         entry("octree", |p| boxed(Octree::new(p))),
         entry("octree classic", |p| {
@@ -52,7 +61,21 @@ pub fn accelerators<T: Real, P: PrimitiveSet<T> + ?Sized + 'static>() -> Vec<Ent
         entry("octree threshold=2 depth=8", |p| {
             boxed(Octree::with_params(p, &fine_octree()))
         }),
+        entry("octree threshold=2 depth=8 packed", |p| {
+            let params = OctreeParams {
+                layout: Layout::Packed,
+                ..fine_octree()
+            };
+            boxed(Octree::with_params(p, &params))
+        }),
         entry("kdtree", |p| boxed(KdTree::new(p))),
+        entry("kdtree packed", |p| {
+            let params = KdTreeParams {
+                layout: Layout::Packed,
+                ..KdTreeParams::default()
+            };
+            boxed(KdTree::with_params(p, &params))
+        }),
         entry("kdtree fast-build", |p| {
             boxed(KdTree::with_params(p, &KdTreeParams::fast_build()))
         }),
@@ -94,6 +117,12 @@ pub fn fine_octree() -> OctreeParams {
 #[must_use]
 pub fn density<T: Real>(m: f64) -> GridParams<T> {
     GridParams::with_density(m)
+}
+
+/// `params` with the cells' triangles kept in `layout`.
+#[must_use]
+pub fn with_layout<T: Real>(params: GridParams<T>, layout: Layout) -> GridParams<T> {
+    GridParams { layout, ..params }
 }
 
 /// A registry entry (the closure coerces to a [`Build`] here).

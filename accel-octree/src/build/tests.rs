@@ -242,7 +242,13 @@ fn presets_shape_the_tree_as_documented() {
 fn the_stadium_costs_far_fewer_tests_than_in_a_grid() {
     let mesh = stadium();
     let octree = Octree::new(&mesh).unwrap();
-    let grid = Grid::new(&mesh).unwrap();
+    // Indexed, so that the counters count every reference a cell makes the
+    // walk test (a packed grid counts only those its block test keeps).
+    let indexed = accel_grid::GridParams {
+        layout: accel_core::packed::Layout::Indexed,
+        ..Default::default()
+    };
+    let grid = Grid::with_params(&mesh, &indexed).unwrap();
     let camera = Camera::look_at(
         Vec3::new(3.0, -4.0, 2.0),
         Vec3::ZERO,

@@ -2,12 +2,15 @@
 //!
 //! Two baselines (`f32`, watertight test, error-bound spawn; the grid and the
 //! kD-tree), then one dial turned at a time: precision, triangle test and
-//! spawn offset on both baselines' structures, and the structure-quality
-//! presets of each accelerator.
+//! spawn offset on both baselines' structures, the structure-quality
+//! presets of each accelerator, and the layout of the grid's cells and the
+//! kD-tree's leaves (memory against speed, same answers).
 
 use crate::accel::{AccelConfig, kdtree_preset, octree_preset};
 use crate::cli::Precision;
 use accel_core::TriangleTest;
+use accel_core::packed::Layout;
+use accel_kdtree::KdTreeParams;
 
 /// Where secondary rays start, precision-free.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,7 +38,7 @@ pub struct Setting {
     /// Short label for tables and plots.
     pub name: String,
     /// Which dial it turns (`baseline`, `precision`, `triangle test`,
-    /// `spawn`, `structure`).
+    /// `spawn`, `structure`, `layout`).
     pub dial: &'static str,
     /// Precision of geometry and queries.
     pub precision: Precision,
@@ -79,7 +82,7 @@ fn setting(
 pub fn all_settings() -> Vec<Setting> {
     use Precision::{F32, F64};
     use TriangleTest::{MollerTrumbore as Mt, Watertight as Wt};
-    let grid = |m: f64| AccelConfig::Grid { density: m };
+    let grid = |m: f64| AccelConfig::grid(m);
     let kd = |p: &str| AccelConfig::KdTree(kdtree_preset(p).expect("a preset"));
     let oct = |p: &str| AccelConfig::Octree(octree_preset(p).expect("a preset"));
     let eb = Spawn::ErrorBound;
@@ -103,6 +106,19 @@ pub fn all_settings() -> Vec<Setting> {
     for p in ["fast-build", "pbrt", "best-traversal"] {
         out.push(setting("structure", F32, Wt, eb, kd(p)));
     }
+    // Each structure in the layout it does not default to: memory per
+    // triangle against speed.
+    let indexed_grid = AccelConfig::Grid {
+        density: 2.0,
+        layout: Layout::Indexed,
+    };
+    let packed_kd = AccelConfig::KdTree(KdTreeParams {
+        layout: Layout::Packed,
+        ..KdTreeParams::default()
+    });
+    for config in [indexed_grid, packed_kd] {
+        out.push(setting("layout", F32, Wt, eb, config));
+    }
     out
 }
 
@@ -123,5 +139,6 @@ mod tests {
         }
         assert!(names.contains("grid m=2 MT") && names.contains("kdtree f64"));
         assert!(names.contains("grid m=2 eps1e-4"));
+        assert!(names.contains("grid m=2 indexed") && names.contains("kdtree packed"));
     }
 }

@@ -1,0 +1,680 @@
+//! Packed triangles: a leaf's or cell's triangles copied into blocks of
+//! [`LANES`] (structure of arrays, Embree's `Triangle4`), whose misses are
+//! decided [`LANES`] at a time with SIMD, exactly.
+//!
+//! Exactness is kept the filtered way. The watertight test
+//! ([`crate::triangle::intersect_triangle`]) first computes the sheared
+//! vertices and the plain products of its three edge functions in `f64`, and
+//! rejects the triangle when two of them have surely opposite signs. The
+//! block test ([`TriangleBlock`]) makes that first stage, with the same
+//! operations in the same order, on every lane at once: a lane it rejects is
+//! one the scalar test rejects, bit for bit. Every other lane (a likely hit,
+//! or a sign too close to call) is handed to the structure, which runs the
+//! ordinary test on it ([`crate::PrimitiveSet::intersect`]). Answers are
+//! therefore those of the indexed layout, not merely close to them.
+//!
+//! The instruction set is chosen at run time, once ([`simd_level`]): the
+//! block test is written with AVX2 intrinsics (and compiled for AVX-512
+//! too), and used where the CPU has them. Elsewhere (other architectures,
+//! x86-64 CPUs without AVX2) the lists are tested one by one, as the
+//! indexed layout does: the portable build of the block test, which the
+//! compiler leaves scalar, measured slower than that.
+//!
+//! Packed and indexed lists are a speed–memory dial ([`Layout`]): a block of
+//! four `f32` triangles takes 144 bytes, against 4 bytes per reference into
+//! the shared mesh.
+
+#[cfg(test)]
+use crate::Vec3;
+use crate::{PreparedRay, PrimitiveSet, Real};
+use std::sync::OnceLock;
+
+/// Triangles per block.
+pub const LANES: usize = 4;
+
+/// How a structure stores the triangles of its leaves or cells. Each
+/// structure's parameters default to the layout that traced faster there:
+/// packed for the grid (its cells hold many references), indexed for the
+/// kD-tree and the octree (their leaves hold two to four, and the copies'
+/// extra cache misses cost more than the block test saves).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Layout {
+    /// Indices into the primitive set only: the least memory.
+    Indexed,
+    /// Each list's triangles also copied into blocks of [`LANES`], tested
+    /// several at once ([`PackedTriangles`]); sets that are not watertight
+    /// triangles ([`PrimitiveSet::watertight_triangle`]) stay indexed.
+    Packed,
+}
+
+impl Layout {
+    /// Every layout.
+    pub const ALL: [Layout; 2] = [Layout::Indexed, Layout::Packed];
+
+    /// The layout's name, as `--layout` takes it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Indexed => "indexed",
+            Layout::Packed => "packed",
+        }
+    }
+}
+
+/// The SIMD instruction set the block test runs with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SimdLevel {
+    /// No block test: each list's triangles are tested one by one.
+    Portable,
+    /// AVX2.
+    Avx2,
+    /// AVX-512 (foundation and vector-length extensions).
+    Avx512,
+}
+
+impl SimdLevel {
+    /// The level's name, as `ACCEL_SIMD` takes it.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            SimdLevel::Portable => "portable",
+            SimdLevel::Avx2 => "avx2",
+            SimdLevel::Avx512 => "avx512",
+        }
+    }
+
+    /// Whether this CPU can run the level.
+    #[must_use]
+    pub fn available(self) -> bool {
+        match self {
+            SimdLevel::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            SimdLevel::Avx512 => {
+                std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+}
+
+/// The level the block test runs with: the widest this CPU has, detected
+/// once. The environment variable `ACCEL_SIMD` (`portable`, `avx2`,
+/// `avx512`) caps it, for measuring one level against another; a level the
+/// CPU lacks, or an unknown name, is ignored.
+#[must_use]
+pub fn simd_level() -> SimdLevel {
+    static LEVEL: OnceLock<SimdLevel> = OnceLock::new();
+    *LEVEL.get_or_init(|| {
+        let best = [SimdLevel::Avx512, SimdLevel::Avx2]
+            .into_iter()
+            .find(|l| l.available())
+            .unwrap_or(SimdLevel::Portable);
+        let cap = std::env::var("ACCEL_SIMD").ok().and_then(|name| {
+            [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512]
+                .into_iter()
+                .find(|l| l.name() == name)
+        });
+        cap.map_or(best, |c| c.min(best))
+    })
+}
+
+/// Four triangles, coordinate by coordinate: `v[vertex][axis][lane]`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct TriangleBlock<T> {
+    v: [[[T; LANES]; 3]; 3],
+}
+
+/// The per-ray constants of the block test, in `f64` as the scalar test
+/// takes them.
+#[derive(Clone, Copy, Debug)]
+struct BlockRay {
+    origin: [f64; 3],
+    shear_x: f64,
+    shear_y: f64,
+    axes: [usize; 3],
+}
+
+impl BlockRay {
+    #[inline(always)]
+    fn new<T: Real>(ray: &PreparedRay<T>) -> Self {
+        let o = ray.ray.origin;
+        Self {
+            origin: [o.x.to_f64(), o.y.to_f64(), o.z.to_f64()],
+            shear_x: ray.shear.x,
+            shear_y: ray.shear.y,
+            axes: ray.axes,
+        }
+    }
+}
+
+#[cfg(test)]
+impl<T: Real> TriangleBlock<T> {
+    /// The scalar statement of the block test, which the tests hold the
+    /// SIMD builds to: the lanes (bit `l` for lane `l`) that the watertight test's first
+    /// stage does not reject: the sheared vertices and the sure signs of the
+    /// plain edge products, computed as [`crate::triangle::intersect_triangle`]
+    /// computes them.
+    #[inline(always)]
+    fn survivors(&self, ray: &BlockRay) -> u32 {
+        let [kx, ky, kz] = ray.axes;
+        let o = ray.origin;
+        let mut x = [[0.0f64; LANES]; 3];
+        let mut y = [[0.0f64; LANES]; 3];
+        for k in 0..3 {
+            let p = &self.v[k];
+            for l in 0..LANES {
+                let az = p[kz][l].to_f64() - o[kz];
+                x[k][l] = (p[kx][l].to_f64() - o[kx]) - ray.shear_x * az;
+                y[k][l] = (p[ky][l].to_f64() - o[ky]) - ray.shear_y * az;
+            }
+        }
+        let [ax, bx, cx] = x;
+        let [ay, by, cy] = y;
+        let mut keep = [false; LANES];
+        for l in 0..LANES {
+            let su = crate::triangle::sure_sign(cx[l] * by[l], cy[l] * bx[l]);
+            let sv = crate::triangle::sure_sign(ax[l] * cy[l], ay[l] * cx[l]);
+            let sw = crate::triangle::sure_sign(bx[l] * ay[l], by[l] * ax[l]);
+            keep[l] = !crate::triangle::opposite_signs(su, sv, sw);
+        }
+        keep.iter()
+            .enumerate()
+            .fold(0, |m, (l, &k)| m | (u32::from(k) << l))
+    }
+}
+
+/// The triangles of a structure's reference lists in blocks of [`LANES`].
+///
+/// A list is known by where it starts in the structure's reference array:
+/// the blocks of the list at `start` begin at `first_block[start]`, one
+/// block per [`LANES`] references, the last padded (its padding lanes are
+/// never reported). Lists of one are not packed.
+#[derive(Clone, Debug)]
+pub struct PackedTriangles<T> {
+    blocks: Vec<TriangleBlock<T>>,
+    first_block: Vec<u32>,
+}
+
+impl<T: Real> PackedTriangles<T> {
+    /// Packs the lists `(start, len)` of `refs` (each `refs[start..start +
+    /// len]`), or `None` when `layout` is [`Layout::Indexed`] or `prims` are
+    /// not watertight triangles.
+    ///
+    /// # Panics
+    /// If a list lies outside `refs`, or refers to a primitive `prims`
+    /// lacks.
+    #[must_use]
+    pub fn new<P: PrimitiveSet<T> + ?Sized>(
+        layout: Layout,
+        prims: &P,
+        refs: &[u32],
+        lists: impl IntoIterator<Item = (usize, usize)>,
+    ) -> Option<Self> {
+        if layout == Layout::Indexed || prims.is_empty() || prims.watertight_triangle(0).is_none() {
+            return None;
+        }
+        // Lists sharing a start share their first references: the longest
+        // one's blocks serve them all.
+        let mut lists: Vec<(usize, usize)> = lists.into_iter().filter(|l| l.1 > 1).collect();
+        lists.sort_unstable_by_key(|&(start, len)| (start, std::cmp::Reverse(len)));
+        lists.dedup_by_key(|l| l.0);
+        let mut first_block = vec![0u32; refs.len() + 1];
+        let mut blocks = Vec::new();
+        for (start, len) in lists {
+            first_block[start] = u32::try_from(blocks.len()).ok()?;
+            for chunk in refs[start..start + len].chunks(LANES) {
+                let mut block = TriangleBlock {
+                    v: [[[T::ZERO; LANES]; 3]; 3],
+                };
+                for (l, &p) in chunk.iter().enumerate() {
+                    let tri = prims.watertight_triangle(p as usize)?;
+                    for (k, vertex) in tri.iter().enumerate() {
+                        for a in 0..3 {
+                            block.v[k][a][l] = vertex[a];
+                        }
+                    }
+                }
+                blocks.push(block);
+            }
+        }
+        Some(Self {
+            blocks,
+            first_block,
+        })
+    }
+
+    /// Bytes held (the blocks and the list index).
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.blocks.len() * size_of::<TriangleBlock<T>>()
+            + self.first_block.len() * size_of::<u32>()
+    }
+
+    /// [`for_each_candidate`] of a packed list (of two or more).
+    #[inline(always)]
+    fn for_each_candidate(
+        &self,
+        start: usize,
+        list: &[u32],
+        ray: &PreparedRay<T>,
+        mut test: impl FnMut(u32) -> bool,
+    ) -> bool {
+        let first = self.first_block[start] as usize;
+        let blocks = &self.blocks[first..first + list.len().div_ceil(LANES)];
+        let ray = BlockRay::new(ray);
+        match simd_level() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: simd_level reports AVX-512F and VL only when the CPU has them.
+            SimdLevel::Avx512 => unsafe { candidates_avx512(blocks, list, &ray, test) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: simd_level reports AVX2 only when the CPU has it.
+            SimdLevel::Avx2 => unsafe { candidates_avx2(blocks, list, &ray, test) },
+            // The portable block test measured slower than testing the
+            // list one by one (the compiler keeps it scalar).
+            _ => list.iter().any(|&p| test(p)),
+        }
+    }
+}
+
+/// Calls `test` with each primitive of `list` (the references
+/// `refs[start..start + list.len()]` of the structure) that the block test
+/// could not reject, in list order, until `test` returns `true`; returns
+/// whether it did. A rejected primitive is one the ray surely misses
+/// ([`crate::PrimitiveSet::intersect`] would return `None`). Without
+/// `packed` lists, and for a list of one (never packed), every primitive
+/// of the list is a candidate.
+#[inline(always)]
+pub fn for_each_candidate<T: Real>(
+    packed: Option<&PackedTriangles<T>>,
+    start: usize,
+    list: &[u32],
+    ray: &PreparedRay<T>,
+    mut test: impl FnMut(u32) -> bool,
+) -> bool {
+    match packed {
+        Some(packed) if list.len() > 1 => packed.for_each_candidate(start, list, ray, test),
+        _ => list.iter().any(|&p| test(p)),
+    }
+}
+
+/// The block loop with the scalar block test (for tests).
+#[cfg(test)]
+fn candidates<T: Real>(
+    blocks: &[TriangleBlock<T>],
+    list: &[u32],
+    ray: &BlockRay,
+    mut test: impl FnMut(u32) -> bool,
+) -> bool {
+    for (block, prims) in blocks.iter().zip(list.chunks(LANES)) {
+        let mut m = block.survivors(ray) & ((1u32 << prims.len()) - 1);
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if test(prims[l]) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// The block loop with the block test in AVX2 intrinsics
+/// ([`avx2::survivors`]), inlined into each build that has them.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn candidates_simd<T: Real>(
+    blocks: &[TriangleBlock<T>],
+    list: &[u32],
+    ray: &BlockRay,
+    mut test: impl FnMut(u32) -> bool,
+) -> bool {
+    // SAFETY: the caller promises AVX2.
+    let lanes = unsafe { avx2::RayLanes::new(ray) };
+    for (block, prims) in blocks.iter().zip(list.chunks(LANES)) {
+        // SAFETY: as above.
+        let survivors = unsafe { avx2::survivors(block, &lanes, ray.axes) };
+        let mut m = survivors & ((1u32 << prims.len()) - 1);
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if test(prims[l]) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// [`candidates_simd`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn candidates_avx2<T: Real>(
+    blocks: &[TriangleBlock<T>],
+    list: &[u32],
+    ray: &BlockRay,
+    test: impl FnMut(u32) -> bool,
+) -> bool {
+    // SAFETY: this function runs only where the CPU has AVX2.
+    unsafe { candidates_simd(blocks, list, ray, test) }
+}
+
+/// [`candidates_simd`] compiled for AVX-512 (the same 256-bit block test,
+/// with AVX-512's encodings available to the compiler).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
+fn candidates_avx512<T: Real>(
+    blocks: &[TriangleBlock<T>],
+    list: &[u32],
+    ray: &BlockRay,
+    test: impl FnMut(u32) -> bool,
+) -> bool {
+    // SAFETY: this function runs only where the CPU has AVX-512 (and so
+    // AVX2).
+    unsafe { candidates_simd(blocks, list, ray, test) }
+}
+
+/// The block test in AVX2 intrinsics: [`TriangleBlock::survivors`], lane
+/// for lane the same operations in `f64` (no fused multiply–add), four
+/// lanes per instruction.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{BlockRay, LANES, TriangleBlock};
+    use crate::Real;
+    use std::arch::x86_64::{
+        __m256d, _CMP_GT_OQ, _CMP_LT_OQ, _mm_loadu_ps, _mm256_add_pd, _mm256_and_pd,
+        _mm256_andnot_pd, _mm256_cmp_pd, _mm256_cvtps_pd, _mm256_loadu_pd, _mm256_movemask_pd,
+        _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sub_pd,
+    };
+
+    /// The ray's constants, one per lane.
+    pub(super) struct RayLanes {
+        origin: [__m256d; 3],
+        shear_x: __m256d,
+        shear_y: __m256d,
+    }
+
+    impl RayLanes {
+        /// # Safety
+        /// The CPU must have AVX2 (as for every function here).
+        #[inline(always)]
+        pub(super) unsafe fn new(ray: &BlockRay) -> Self {
+            // SAFETY: the caller promises AVX2.
+            unsafe {
+                Self {
+                    origin: [
+                        _mm256_set1_pd(ray.origin[0]),
+                        _mm256_set1_pd(ray.origin[1]),
+                        _mm256_set1_pd(ray.origin[2]),
+                    ],
+                    shear_x: _mm256_set1_pd(ray.shear_x),
+                    shear_y: _mm256_set1_pd(ray.shear_y),
+                }
+            }
+        }
+    }
+
+    /// One coordinate of four triangles' vertex, widened to `f64`.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (as for every function here).
+    #[inline(always)]
+    unsafe fn load<T: Real>(lanes: &[T; LANES]) -> __m256d {
+        if size_of::<T>() == size_of::<f32>() {
+            // SAFETY: `Real` is sealed to f32 and f64, so a `T` of f32's
+            // size is f32; the array holds four of them.
+            unsafe { _mm256_cvtps_pd(_mm_loadu_ps(lanes.as_ptr().cast::<f32>())) }
+        } else {
+            // SAFETY: as above, `T` is f64 here; four of them.
+            unsafe { _mm256_loadu_pd(lanes.as_ptr().cast::<f64>()) }
+        }
+    }
+
+    /// One vertex of four triangles translated to the ray origin and
+    /// sheared: its `x` and `y` in the ray's frame. (A function, not a
+    /// closure: closures here would not inherit the caller's AVX2.)
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn sheared<T: Real>(
+        p: &[[T; LANES]; 3],
+        ray: &RayLanes,
+        [kx, ky, kz]: [usize; 3],
+    ) -> (__m256d, __m256d) {
+        // SAFETY: the caller promises AVX2.
+        unsafe {
+            let az = _mm256_sub_pd(load(&p[kz]), ray.origin[kz]);
+            (
+                _mm256_sub_pd(
+                    _mm256_sub_pd(load(&p[kx]), ray.origin[kx]),
+                    _mm256_mul_pd(ray.shear_x, az),
+                ),
+                _mm256_sub_pd(
+                    _mm256_sub_pd(load(&p[ky]), ray.origin[ky]),
+                    _mm256_mul_pd(ray.shear_y, az),
+                ),
+            )
+        }
+    }
+
+    /// The lanes where `p − q` is surely below zero, and those where it is
+    /// surely above (`crate::triangle::sure_sign` on four lanes).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn sure_sign(p: __m256d, q: __m256d) -> (__m256d, __m256d) {
+        // SAFETY: the caller promises AVX2.
+        unsafe {
+            let sign = _mm256_set1_pd(-0.0);
+            let r = _mm256_sub_pd(p, q);
+            let bound = _mm256_add_pd(
+                _mm256_mul_pd(
+                    _mm256_set1_pd(2.0 * f64::EPSILON),
+                    _mm256_add_pd(_mm256_andnot_pd(sign, p), _mm256_andnot_pd(sign, q)),
+                ),
+                _mm256_set1_pd(f64::MIN_POSITIVE),
+            );
+            let sure = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_andnot_pd(sign, r), bound);
+            let zero = _mm256_setzero_pd();
+            (
+                _mm256_and_pd(sure, _mm256_cmp_pd::<_CMP_LT_OQ>(r, zero)),
+                _mm256_and_pd(sure, _mm256_cmp_pd::<_CMP_GT_OQ>(r, zero)),
+            )
+        }
+    }
+
+    /// The lanes the first stage of the watertight test does not reject.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    pub(super) unsafe fn survivors<T: Real>(
+        block: &TriangleBlock<T>,
+        ray: &RayLanes,
+        [kx, ky, kz]: [usize; 3],
+    ) -> u32 {
+        // SAFETY: the caller promises AVX2.
+        unsafe {
+            let axes = [kx, ky, kz];
+            let (ax, ay) = sheared(&block.v[0], ray, axes);
+            let (bx, by) = sheared(&block.v[1], ray, axes);
+            let (cx, cy) = sheared(&block.v[2], ray, axes);
+            let (un, up) = sure_sign(_mm256_mul_pd(cx, by), _mm256_mul_pd(cy, bx));
+            let (vn, vp) = sure_sign(_mm256_mul_pd(ax, cy), _mm256_mul_pd(ay, cx));
+            let (wn, wp) = sure_sign(_mm256_mul_pd(bx, ay), _mm256_mul_pd(by, ax));
+            let reject = _mm256_and_pd(
+                _mm256_or_pd(_mm256_or_pd(un, vn), wn),
+                _mm256_or_pd(_mm256_or_pd(up, vp), wp),
+            );
+            !(_mm256_movemask_pd(reject) as u32) & 0xF
+        }
+    }
+}
+
+/// A triangle's vertices as a block lane holds them (for tests).
+#[cfg(test)]
+fn lane<T: Real>(b: &TriangleBlock<T>, l: usize) -> [Vec3<T>; 3] {
+    [0, 1, 2].map(|k| Vec3::new(b.v[k][0][l], b.v[k][1][l], b.v[k][2][l]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Ray, TriangleMesh, triangle::intersect_triangle};
+    use proptest::prelude::*;
+
+    /// A mesh of `n` random triangles sharing edges (a strip), in a small
+    /// box, so that rays meet edges and vertices too.
+    fn strip<T: Real>(coords: &[f64]) -> TriangleMesh<T> {
+        let vertices: Vec<Vec3<T>> = coords
+            .chunks_exact(3)
+            .map(|c| Vec3::new(T::from_f64(c[0]), T::from_f64(c[1]), T::from_f64(c[2])))
+            .collect();
+        let indices = (0..vertices.len() as u32 - 2)
+            .map(|i| [i, i + 1, i + 2])
+            .collect();
+        TriangleMesh::new(vertices, indices).expect("finite strip")
+    }
+
+    /// Every level this CPU has reports, for every list, the primitives of
+    /// the list the scalar test hits, in order, and only primitives of the
+    /// list; the lanes hold the primitives' own vertices.
+    fn check<T: Real>(coords: &[f64], o: [f64; 3], d: [f64; 3], sizes: &[usize]) {
+        let mesh = strip::<T>(coords);
+        let n = mesh.len() as u32;
+        let refs: Vec<u32> = (0..sizes.iter().sum::<usize>() as u32)
+            .map(|i| (i * 7) % n)
+            .collect();
+        let mut lists = Vec::new();
+        let mut start = 0;
+        for &len in sizes {
+            lists.push((start, len));
+            start += len;
+        }
+        let packed = PackedTriangles::new(Layout::Packed, &mesh, &refs, lists.clone())
+            .expect("a mesh packs");
+        let v = |a: [f64; 3]| Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]));
+        let Ok(ray) = Ray::new(v(o), v(d)) else {
+            return;
+        };
+        let prepared = PreparedRay::new(ray);
+        for &(start, len) in lists.iter().filter(|l| l.1 > 1) {
+            let list = &refs[start..start + len];
+            let hits: Vec<u32> = list
+                .iter()
+                .copied()
+                .filter(|&p| {
+                    let [a, b, c] = mesh.triangle(p as usize);
+                    intersect_triangle(&prepared, a, b, c, ray.t_max).is_some()
+                })
+                .collect();
+            let first = packed.first_block[start] as usize;
+            for (i, &p) in list.iter().enumerate() {
+                let block = &packed.blocks[first + i / LANES];
+                assert_eq!(lane(block, i % LANES), mesh.triangle(p as usize));
+            }
+            for level in [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512] {
+                if !level.available() {
+                    continue;
+                }
+                let blocks = &packed.blocks[first..first + len.div_ceil(LANES)];
+                let br = BlockRay::new(&prepared);
+                let mut seen = Vec::new();
+                let collect = |p| {
+                    seen.push(p);
+                    false
+                };
+                match level {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: the level is available.
+                    SimdLevel::Avx512 => unsafe { candidates_avx512(blocks, list, &br, collect) },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: the level is available.
+                    SimdLevel::Avx2 => unsafe { candidates_avx2(blocks, list, &br, collect) },
+                    _ => candidates(blocks, list, &br, collect),
+                };
+                let mut at = 0;
+                for &p in &seen {
+                    let found = list[at..].iter().position(|&q| q == p);
+                    assert!(found.is_some(), "{level:?}: {p} out of order or not listed");
+                    at += found.unwrap_or(0) + 1;
+                }
+                for h in &hits {
+                    assert!(seen.contains(h), "{level:?} rejected {h}, which is hit");
+                }
+            }
+        }
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![-2.0..2.0f64, (-4i32..4).prop_map(|i| f64::from(i) * 0.5)]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2_000))]
+        /// The block test never rejects a hit, at any level, in either
+        /// precision, on strips whose shared edges and vertices lie on
+        /// half-integer points that the rays aim at.
+        #[test]
+        fn blocks_reject_no_hit(
+            coords in prop::collection::vec(coord(), 3 * 3..3 * 12),
+            o in [coord(), coord(), coord()],
+            d in [coord(), coord(), coord()],
+            sizes in prop::collection::vec(1usize..11, 1..5),
+        ) {
+            let mut coords = coords;
+            coords.truncate(coords.len() / 3 * 3);
+            check::<f32>(&coords, o, d, &sizes);
+            check::<f64>(&coords, o, d, &sizes);
+        }
+    }
+
+    #[test]
+    fn blocks_reject_the_triangles_a_ray_surely_misses() {
+        // A fan of four triangles around the z axis, and a ray down the
+        // axis well inside the first: the other three are rejected.
+        let mesh = TriangleMesh::new(
+            vec![
+                Vec3::new(0.0f32, 0.0, 0.0),
+                Vec3::new(4.0, -1.0, 0.0),
+                Vec3::new(4.0, 1.0, 0.0),
+                Vec3::new(-4.0, -1.0, 0.0),
+                Vec3::new(-4.0, 1.0, 0.0),
+                Vec3::new(-1.0, 4.0, 0.0),
+                Vec3::new(1.0, 4.0, 0.0),
+                Vec3::new(-1.0, -4.0, 0.0),
+                Vec3::new(1.0, -4.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 3, 4], [0, 5, 6], [0, 7, 8]],
+        )
+        .expect("finite fan");
+        let refs = [0, 1, 2, 3];
+        let packed = PackedTriangles::new(Layout::Packed, &mesh, &refs, [(0, 4)]).expect("packs");
+        let ray = PreparedRay::new(
+            Ray::new(Vec3::new(3.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0)).expect("valid"),
+        );
+        let mut seen = Vec::new();
+        packed.for_each_candidate(0, &refs, &ray, |p| {
+            seen.push(p);
+            false
+        });
+        assert_eq!(seen, [0]);
+    }
+
+    #[test]
+    fn indexed_layout_and_other_primitives_do_not_pack() {
+        let mesh = strip::<f32>(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        assert!(PackedTriangles::new(Layout::Indexed, &mesh, &[0], [(0, 1)]).is_none());
+        let spheres = vec![crate::Sphere::new(Vec3::new(0.0f32, 0.0, 0.0), 1.0)];
+        assert!(PackedTriangles::new(Layout::Packed, &spheres, &[0], [(0, 1)]).is_none());
+    }
+}
