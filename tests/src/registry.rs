@@ -44,10 +44,10 @@ pub fn accelerators<T: Real, P: PrimitiveSet<T> + ?Sized + 'static>() -> Vec<Ent
         entry("grid m=1", |p| boxed(Grid::with_params(p, &density(1.0)))),
         entry("grid m=2", |p| boxed(Grid::with_params(p, &density(2.0)))),
         entry("grid m=4", |p| boxed(Grid::with_params(p, &density(4.0)))),
-        entry("grid m=1 indexed", |p| {
+        entry("grid m=1 packed", |p| {
             boxed(Grid::with_params(
                 p,
-                &with_layout(density(1.0), Layout::Indexed),
+                &with_layout(density(1.0), Layout::Packed),
             ))
         }),
         entry("grid region>scene", |p| boxed(enclosing_region_grid(p))),

@@ -242,8 +242,9 @@ fn presets_shape_the_tree_as_documented() {
 fn the_stadium_costs_far_fewer_tests_than_in_a_grid() {
     let mesh = stadium();
     let octree = Octree::new(&mesh).unwrap();
-    // Indexed, so that the counters count every reference a cell makes the
-    // walk test (a packed grid counts only those its block test keeps).
+    // Indexed (the default), so that the counters count every reference a
+    // cell makes the walk test (a packed grid counts only those its block
+    // test keeps).
     let indexed = accel_grid::GridParams {
         layout: accel_core::packed::Layout::Indexed,
         ..Default::default()

@@ -106,17 +106,17 @@ pub fn all_settings() -> Vec<Setting> {
     for p in ["fast-build", "pbrt", "best-traversal"] {
         out.push(setting("structure", F32, Wt, eb, kd(p)));
     }
-    // Each structure in the layout it does not default to: memory per
-    // triangle against speed.
-    let indexed_grid = AccelConfig::Grid {
+    // The grid and the kD-tree with packed lists: memory per triangle
+    // against speed.
+    let packed_grid = AccelConfig::Grid {
         density: 2.0,
-        layout: Layout::Indexed,
+        layout: Layout::Packed,
     };
     let packed_kd = AccelConfig::KdTree(KdTreeParams {
         layout: Layout::Packed,
         ..KdTreeParams::default()
     });
-    for config in [indexed_grid, packed_kd] {
+    for config in [packed_grid, packed_kd] {
         out.push(setting("layout", F32, Wt, eb, config));
     }
     out
@@ -139,6 +139,6 @@ mod tests {
         }
         assert!(names.contains("grid m=2 MT") && names.contains("kdtree f64"));
         assert!(names.contains("grid m=2 eps1e-4"));
-        assert!(names.contains("grid m=2 indexed") && names.contains("kdtree packed"));
+        assert!(names.contains("grid m=2 packed") && names.contains("kdtree packed"));
     }
 }
