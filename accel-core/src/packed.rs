@@ -309,6 +309,21 @@ pub fn for_each_candidate<T: Real>(
     }
 }
 
+/// Calls `test` with the primitive of each lane of `survivors` (bit `l` for
+/// lane `l`) that `prims` fills, in lane order, until it returns `true`.
+#[inline(always)]
+fn visit_lanes(survivors: u32, prims: &[u32], test: &mut impl FnMut(u32) -> bool) -> bool {
+    let mut m = survivors & ((1u32 << prims.len()) - 1);
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        if test(prims[l]) {
+            return true;
+        }
+    }
+    false
+}
+
 /// The block loop with the scalar block test (for tests).
 #[cfg(test)]
 fn candidates<T: Real>(
@@ -318,13 +333,8 @@ fn candidates<T: Real>(
     mut test: impl FnMut(u32) -> bool,
 ) -> bool {
     for (block, prims) in blocks.iter().zip(list.chunks(LANES)) {
-        let mut m = block.survivors(ray) & ((1u32 << prims.len()) - 1);
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            if test(prims[l]) {
-                return true;
-            }
+        if visit_lanes(block.survivors(ray), prims, &mut test) {
+            return true;
         }
     }
     false
@@ -348,13 +358,8 @@ unsafe fn candidates_simd<T: Real>(
     for (block, prims) in blocks.iter().zip(list.chunks(LANES)) {
         // SAFETY: as above.
         let survivors = unsafe { avx2::survivors(block, &lanes, ray.axes) };
-        let mut m = survivors & ((1u32 << prims.len()) - 1);
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            if test(prims[l]) {
-                return true;
-            }
+        if visit_lanes(survivors, prims, &mut test) {
+            return true;
         }
     }
     false
