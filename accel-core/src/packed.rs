@@ -14,11 +14,13 @@
 //! therefore those of the indexed layout, not merely close to them.
 //!
 //! The instruction set is chosen at run time, once ([`simd_level`]): the
-//! block test is written with AVX2 intrinsics (and compiled for AVX-512
-//! too), and used where the CPU has them. Elsewhere (other architectures,
-//! x86-64 CPUs without AVX2) the lists are tested one by one, as the
-//! indexed layout does: the portable build of the block test, which the
-//! compiler leaves scalar, measured slower than that.
+//! block test is written with AVX2 intrinsics and used where the CPU has
+//! them. Elsewhere (other architectures, x86-64 CPUs without AVX2) the lists
+//! are tested one by one, as the indexed layout does: the portable build of
+//! the block test, which the compiler leaves scalar, measured slower than
+//! that. A build of the same four-lane test for AVX-512 measured as fast as
+//! AVX2's and is not kept; AVX-512 would pay with blocks of eight, which the
+//! short lists of these structures would mostly leave half empty.
 //!
 //! Packed and indexed lists are a speed–memory dial ([`Layout`]): a block of
 //! four `f32` triangles takes 144 bytes, against 4 bytes per reference into
@@ -74,8 +76,6 @@ pub enum SimdLevel {
     Portable,
     /// AVX2.
     Avx2,
-    /// AVX-512 (foundation and vector-length extensions).
-    Avx512,
 }
 
 impl SimdLevel {
@@ -85,7 +85,6 @@ impl SimdLevel {
         match self {
             SimdLevel::Portable => "portable",
             SimdLevel::Avx2 => "avx2",
-            SimdLevel::Avx512 => "avx512",
         }
     }
 
@@ -96,11 +95,6 @@ impl SimdLevel {
             SimdLevel::Portable => true,
             #[cfg(target_arch = "x86_64")]
             SimdLevel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx512 => {
-                std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-            }
             #[cfg(not(target_arch = "x86_64"))]
             _ => false,
         }
@@ -108,19 +102,20 @@ impl SimdLevel {
 }
 
 /// The level the block test runs with: the widest this CPU has, detected
-/// once. The environment variable `ACCEL_SIMD` (`portable`, `avx2`,
-/// `avx512`) caps it, for measuring one level against another; a level the
+/// once. The environment variable `ACCEL_SIMD` (`portable`, `avx2`) caps
+/// it, for measuring one level against another; a level the
 /// CPU lacks, or an unknown name, is ignored.
 #[must_use]
 pub fn simd_level() -> SimdLevel {
     static LEVEL: OnceLock<SimdLevel> = OnceLock::new();
     *LEVEL.get_or_init(|| {
-        let best = [SimdLevel::Avx512, SimdLevel::Avx2]
-            .into_iter()
-            .find(|l| l.available())
-            .unwrap_or(SimdLevel::Portable);
+        let best = if SimdLevel::Avx2.available() {
+            SimdLevel::Avx2
+        } else {
+            SimdLevel::Portable
+        };
         let cap = std::env::var("ACCEL_SIMD").ok().and_then(|name| {
-            [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512]
+            [SimdLevel::Portable, SimdLevel::Avx2]
                 .into_iter()
                 .find(|l| l.name() == name)
         });
@@ -276,9 +271,6 @@ impl<T: Real> PackedTriangles<T> {
         let ray = BlockRay::new(ray);
         match simd_level() {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: simd_level reports AVX-512F and VL only when the CPU has them.
-            SimdLevel::Avx512 => unsafe { candidates_avx512(blocks, list, &ray, test) },
-            #[cfg(target_arch = "x86_64")]
             // SAFETY: simd_level reports AVX2 only when the CPU has it.
             SimdLevel::Avx2 => unsafe { candidates_avx2(blocks, list, &ray, test) },
             // The portable block test measured slower than testing the
@@ -375,21 +367,6 @@ fn candidates_avx2<T: Real>(
     test: impl FnMut(u32) -> bool,
 ) -> bool {
     // SAFETY: this function runs only where the CPU has AVX2.
-    unsafe { candidates_simd(blocks, list, ray, test) }
-}
-
-/// [`candidates_simd`] compiled for AVX-512 (the same 256-bit block test,
-/// with AVX-512's encodings available to the compiler).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512vl")]
-fn candidates_avx512<T: Real>(
-    blocks: &[TriangleBlock<T>],
-    list: &[u32],
-    ray: &BlockRay,
-    test: impl FnMut(u32) -> bool,
-) -> bool {
-    // SAFETY: this function runs only where the CPU has AVX-512 (and so
-    // AVX2).
     unsafe { candidates_simd(blocks, list, ray, test) }
 }
 
@@ -594,7 +571,7 @@ mod tests {
                 let block = &packed.blocks[first + i / LANES];
                 assert_eq!(lane(block, i % LANES), mesh.triangle(p as usize));
             }
-            for level in [SimdLevel::Portable, SimdLevel::Avx2, SimdLevel::Avx512] {
+            for level in [SimdLevel::Portable, SimdLevel::Avx2] {
                 if !level.available() {
                     continue;
                 }
@@ -606,9 +583,6 @@ mod tests {
                     false
                 };
                 match level {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: the level is available.
-                    SimdLevel::Avx512 => unsafe { candidates_avx512(blocks, list, &br, collect) },
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: the level is available.
                     SimdLevel::Avx2 => unsafe { candidates_avx2(blocks, list, &br, collect) },
