@@ -367,3 +367,33 @@ fn scenes_inside_the_f32_limit_render_or_name_the_remedy() {
         }
     }
 }
+
+/// See: issue 32, item 4. A run killed while it traces (SIGKILL: no
+/// destructor runs, as after an unhandled Ctrl-C or SIGTERM) leaves no hidden
+/// `.out.png.XXXXXX.tmp` behind: the outputs were checked before the work
+/// began, but no temporary file exists until the picture is written.
+#[test]
+fn an_interrupted_run_leaves_no_temporary_file() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_render"))
+        .current_dir(dir.path())
+        .args(["--out", "out.png", "--heatmap=heat.png"])
+        .args(["--width", "1024", "--height", "1024", "--ao", "16"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    // The structure is built: tracing starts next (seconds of work).
+    let tracing = lines.map_while(Result::ok).any(|l| l.starts_with("build "));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(tracing, "premise: the run got as far as tracing");
+    assert!(
+        !dir.path().join("out.png").exists(),
+        "premise: killed before the picture was written"
+    );
+    assert_eq!(entries(dir.path()), Vec::<String>::new());
+}
