@@ -11,7 +11,8 @@ use rayon::prelude::*;
 /// primitive.
 ///
 /// # Errors
-/// [`BuildError::NonFinitePrimitive`] or [`BuildError::TooManyPrimitives`].
+/// [`BuildError::NonFinitePrimitive`], [`BuildError::TooManyPrimitives`], or
+/// [`BuildError::OutOfRange`] for finite coordinates beyond [`Real::LIMIT`].
 pub fn primitive_bounds<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
 ) -> Result<(Vec<Aabb<T>>, Aabb<T>), BuildError> {
@@ -25,6 +26,7 @@ pub fn primitive_bounds<T: Real, P: PrimitiveSet<T> + ?Sized>(
         .map(|chunk| chunk.iter().fold(Union::EMPTY, Union::add))
         .reduce(|| Union::EMPTY, Union::merge);
     total.checked(|| boxes.iter().position(|b| !b.is_finite()))?;
+    check_range(&total.bounds)?;
     Ok((boxes, total.bounds))
 }
 
@@ -49,7 +51,34 @@ pub fn bounds_union<T: Real, P: PrimitiveSet<T> + ?Sized>(
         })
         .reduce(|| Union::EMPTY, Union::merge);
     total.checked(|| (0..n).position(|i| !prims.bounds(i).is_finite()))?;
+    check_range(&total.bounds)?;
     Ok(total.bounds)
+}
+
+/// Refuses a finite box that reaches beyond `±T::LIMIT` ([`Real::LIMIT`]):
+/// past it, cell widths, split positions and ray parameters across the box
+/// could overflow. An empty box passes.
+///
+/// # Errors
+/// [`BuildError::OutOfRange`] naming the first such axis and coordinate.
+pub fn check_range<T: Real>(b: &Aabb<T>) -> Result<(), BuildError> {
+    if b.is_empty() {
+        return Ok(());
+    }
+    let beyond = |x: T| !(x.abs() <= T::LIMIT);
+    match (0..3).find(|&a| beyond(b.min[a]) || beyond(b.max[a])) {
+        None => Ok(()),
+        Some(axis) => {
+            let (lo, hi) = (b.min[axis], b.max[axis]);
+            let value = if beyond(lo) { lo } else { hi };
+            Err(BuildError::OutOfRange {
+                precision: T::NAME,
+                axis,
+                value: value.to_f64(),
+                limit: T::LIMIT.to_f64(),
+            })
+        }
+    }
 }
 
 /// Primitives per task of the unions: each task folds a run of boxes with

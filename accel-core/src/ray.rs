@@ -9,6 +9,20 @@ pub enum QueryError {
     /// The ray origin has a NaN or infinite component.
     #[error("ray origin is not finite")]
     NonFiniteOrigin,
+    /// The ray origin is finite but lies beyond `±T::LIMIT`
+    /// ([`Real::LIMIT`]), where the accelerators' arithmetic could overflow.
+    #[error(
+        "ray origin is beyond ±{} on {}, the largest {precision} coordinate the accelerators \
+         accept",
+        limit_text(precision),
+        ["x", "y", "z"][*axis % 3]
+    )]
+    OriginOutOfRange {
+        /// The precision (`"f32"` or `"f64"`).
+        precision: &'static str,
+        /// The first axis beyond the limit (0, 1, 2 for x, y, z).
+        axis: usize,
+    },
     /// The ray direction has a NaN or infinite component.
     #[error("ray direction is not finite")]
     NonFiniteDirection,
@@ -21,6 +35,15 @@ pub enum QueryError {
     /// A region query box has a NaN or infinite corner.
     #[error("query region is not finite")]
     NonFiniteRegion,
+}
+
+/// [`Real::LIMIT`] of the precision named `precision`, as text.
+fn limit_text(precision: &str) -> String {
+    if precision == "f32" {
+        format!("{:e}", f32::LIMIT)
+    } else {
+        format!("{:e}", f64::LIMIT)
+    }
 }
 
 /// A ray `origin + t·direction` restricted to `t ∈ [t_min, t_max]`.
@@ -72,12 +95,20 @@ impl<T: Real> Ray<T> {
     /// Checks the ray: every accelerator calls this before answering.
     ///
     /// # Errors
-    /// [`QueryError::NonFiniteOrigin`], [`QueryError::NonFiniteDirection`],
-    /// [`QueryError::ZeroDirection`] or [`QueryError::NanInterval`].
+    /// [`QueryError::NonFiniteOrigin`], [`QueryError::OriginOutOfRange`],
+    /// [`QueryError::NonFiniteDirection`], [`QueryError::ZeroDirection`] or
+    /// [`QueryError::NanInterval`].
     #[inline]
     pub fn validate(&self) -> Result<(), QueryError> {
         if !self.origin.is_finite() {
             return Err(QueryError::NonFiniteOrigin);
+        }
+        let o = self.origin.abs();
+        if !(o.x <= T::LIMIT && o.y <= T::LIMIT && o.z <= T::LIMIT) {
+            return Err(QueryError::OriginOutOfRange {
+                precision: T::NAME,
+                axis: (0..3).find(|&a| !(o[a] <= T::LIMIT)).unwrap_or(0),
+            });
         }
         if !self.direction.is_finite() {
             return Err(QueryError::NonFiniteDirection);

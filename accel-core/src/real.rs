@@ -56,6 +56,16 @@ pub trait Real:
     const MAX: Self;
     /// The smallest positive normal value.
     const MIN_POSITIVE: Self;
+    /// The largest coordinate magnitude the accelerators accept. In `f32`,
+    /// `MAX / 16` (about 2.1e37): the difference of two coordinates stays
+    /// finite with room for the traversals' margins and its reciprocal
+    /// stays normal, and the products the triangle, sphere and box tests form
+    /// run in `f64`. In `f64`, 2^240 (about 1.8e72): a product of four
+    /// coordinate differences (the sphere test's discriminant), which those
+    /// tests form in `f64` itself, stays finite. A
+    /// scene or a ray origin beyond it is refused
+    /// ([`crate::BuildError::OutOfRange`], [`crate::QueryError::OriginOutOfRange`]).
+    const LIMIT: Self;
     /// Half the distance from 1 to the next float: the unit roundoff `u`
     /// (pbrt's `MachineEpsilon`).
     const UNIT_ROUNDOFF: Self;
@@ -179,8 +189,19 @@ fn diff_of_products_f64_exact(a: f64, b: f64, c: f64, d: f64) -> f64 {
     if r == 0.0 { e_err } else { r }
 }
 
+/// [`Real::LIMIT`] of `f64`: 2^240, about 1.8e72.
+const F64_LIMIT: f64 = {
+    let mut x = 1.0f64;
+    let mut i = 0;
+    while i < 240 {
+        x *= 2.0;
+        i += 1;
+    }
+    x
+};
+
 macro_rules! impl_real {
-    ($t:ty, $bits:ty, $name:literal, $diff:expr) => {
+    ($t:ty, $bits:ty, $name:literal, $limit:expr, $diff:expr) => {
         impl Real for $t {
             type Wide = f64;
             const ZERO: Self = 0.0;
@@ -190,6 +211,7 @@ macro_rules! impl_real {
             const NEG_INFINITY: Self = <$t>::NEG_INFINITY;
             const MAX: Self = <$t>::MAX;
             const MIN_POSITIVE: Self = <$t>::MIN_POSITIVE;
+            const LIMIT: Self = $limit;
             const UNIT_ROUNDOFF: Self = <$t>::EPSILON * 0.5;
             const NAME: &'static str = $name;
 
@@ -277,25 +299,40 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, u32, "f32", |a: f32, b: f32, c: f32, d: f32| {
-    // Each product of two f32 is exact in f64; only the subtraction rounds,
-    // so the sign is exact and nothing overflows or goes subnormal.
-    (a as f64) * (b as f64) - (c as f64) * (d as f64)
-});
-
-impl_real!(f64, u64, "f64", |a: f64, b: f64, c: f64, d: f64| {
-    let (p, q) = (a * b, c * d);
-    let r = p - q;
-    // The plain result errs by up to u·(|p| + |q|): a few ulps of r unless the
-    // products cancel. Then (zero included) the products' rounding errors
-    // dominate, and a degenerate triangle's edge functions would be noise
-    // that `t` is computed from (see bug 2 in the tests crate).
-    if r.abs() * 4.0 >= p.abs() + q.abs() {
-        r
-    } else {
-        diff_of_products_f64_exact(a, b, c, d)
+// f32: a sixteenth of the largest value; products of coordinates run in f64.
+impl_real!(
+    f32,
+    u32,
+    "f32",
+    f32::MAX / 16.0,
+    |a: f32, b: f32, c: f32, d: f32| {
+        // Each product of two f32 is exact in f64; only the subtraction rounds,
+        // so the sign is exact and nothing overflows or goes subnormal.
+        (a as f64) * (b as f64) - (c as f64) * (d as f64)
     }
-});
+);
+
+// f64: 2^240, so that a product of four coordinate differences (the sphere
+// test's discriminant, (d·oc)²) stays finite: (4·2^240)^4 < f64::MAX.
+impl_real!(
+    f64,
+    u64,
+    "f64",
+    F64_LIMIT,
+    |a: f64, b: f64, c: f64, d: f64| {
+        let (p, q) = (a * b, c * d);
+        let r = p - q;
+        // The plain result errs by up to u·(|p| + |q|): a few ulps of r unless the
+        // products cancel. Then (zero included) the products' rounding errors
+        // dominate, and a degenerate triangle's edge functions would be noise
+        // that `t` is computed from (see bug 2 in the tests crate).
+        if r.abs() * 4.0 >= p.abs() + q.abs() {
+            r
+        } else {
+            diff_of_products_f64_exact(a, b, c, d)
+        }
+    }
+);
 
 /// The smaller of `a` and `b` by a plain select: one instruction, where
 /// [`Real::min`]'s NaN rule costs several. For values that cannot be NaN

@@ -86,12 +86,21 @@ impl<T: Real> SurfacePoint<T> {
 
 /// The unit geometric normal `(p1 − p0) × (p2 − p0)` normalised, or `None`
 /// for a degenerate triangle (zero, NaN or infinite length).
+///
+/// Computed in [`Real::Wide`] and rounded once: in `f32` the cross product
+/// of edges longer than about 1e19 would overflow (see: issue 32, item 1),
+/// and in `f64` edges within [`Real::LIMIT`] leave it finite.
 #[inline]
 #[must_use]
 pub fn geometric_normal<T: Real>(p: [Vec3<T>; 3]) -> Option<Vec3<T>> {
-    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    let q: [Vec3<T::Wide>; 3] = p.map(Vec3::cast);
+    let n = (q[1] - q[0]).cross(q[2] - q[0]);
     let len = n.length();
-    (len > T::ZERO && len.is_finite()).then(|| n / len)
+    if !(len > T::Wide::ZERO && len.is_finite()) {
+        return None;
+    }
+    let unit: Vec3<T> = (n / len).cast();
+    (unit != Vec3::ZERO).then_some(unit)
 }
 
 /// pbrt-v4's `OffsetRayOrigin`: the point moved along `n` (towards the side
@@ -263,21 +272,29 @@ mod tests {
     /// Spawns a ray off random hits on big, tilted triangles far from the
     /// origin and counts those that hit their own triangle again.
     fn self_hits<T: Real>(mode: SpawnOffset<T>, offset: f64, trials: u32) -> u32 {
+        spawned::<T>(mode, offset, 50.0, trials).0
+    }
+
+    /// [`self_hits`] with triangles of radius `size`: the self-hits, and the
+    /// secondary rays tested (an origin past `T::LIMIT` is refused).
+    fn spawned<T: Real>(mode: SpawnOffset<T>, offset: f64, size: f64, trials: u32) -> (u32, u32) {
         let mut rng = Rng(11);
-        let mut count = 0;
+        let (mut count, mut tested) = (0, 0);
         for _ in 0..trials {
             let c = Vec3::new(
                 rng.range(-1.0, 1.0),
                 rng.range(-1.0, 1.0),
                 rng.range(-1.0, 1.0),
             ) * offset;
-            let tri: [Vec3<T>; 3] = [0; 3].map(|_| (c + rng.unit_vector() * 50.0).cast());
+            let tri: [Vec3<T>; 3] = [0; 3].map(|_| (c + rng.unit_vector() * size).cast());
             let Some(n) = geometric_normal(tri) else {
                 continue;
             };
             let target = (tri[0].cast::<f64>() + tri[1].cast() + tri[2].cast()) * (1.0 / 3.0);
-            let origin = target + rng.unit_vector() * 200.0;
-            let ray = Ray::new(origin.cast::<T>(), (target - origin).cast()).unwrap();
+            let origin = target + rng.unit_vector() * (4.0 * size);
+            let Ok(ray) = Ray::new(origin.cast::<T>(), (target - origin).cast()) else {
+                continue;
+            };
             let pr = PreparedRay::new(ray);
             let Some(h) = intersect_triangle(&pr, tri[0], tri[1], tri[2], T::INFINITY) else {
                 continue;
@@ -294,12 +311,35 @@ mod tests {
                 w = -w;
             }
             let o = spawn_origin(mode, tri, &ray, &hit, w);
+            assert!(o.is_finite(), "spawned {o:?} off {tri:?}");
             let Ok(sec) = Ray::new(o, w) else { continue };
             let sec = PreparedRay::new(sec);
+            tested += 1;
             count +=
                 u32::from(intersect_triangle(&sec, tri[0], tri[1], tri[2], T::INFINITY).is_some());
         }
-        count
+        (count, tested)
+    }
+
+    /// See: issue 32, item 1. Triangles as large as the accepted range
+    /// ([`Real::LIMIT`]) and against its edge: every spawned origin is
+    /// finite and none hits its own triangle again, in both precisions.
+    #[test]
+    fn the_error_bound_holds_at_the_limit_of_the_range() {
+        fn check<T: Real>() {
+            let limit = T::LIMIT.to_f64();
+            for (offset, size) in [(0.0, 0.2), (0.5, 0.2), (0.9, 0.05), (0.999, 1e-4)] {
+                let (hits, tested) =
+                    spawned::<T>(SpawnOffset::ErrorBound, offset * limit, size * limit, 2000);
+                assert!(
+                    tested > 500,
+                    "premise: {tested} rays spawned at {offset}, {size}"
+                );
+                assert_eq!(hits, 0, "{} at {offset}·LIMIT, size {size}·LIMIT", T::NAME);
+            }
+        }
+        check::<f32>();
+        check::<f64>();
     }
 
     #[test]

@@ -197,6 +197,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             if !region.is_finite() || region.is_empty() {
                 return Err(BuildError::InvalidRegion);
             }
+            accel_core::check_range(region)?;
             // Count what the region holds, for the resolution rule.
             let count = (0..prims.len())
                 .filter(|&i| prims.bounds(i).overlaps(region) && prims.overlaps_box(i, region))

@@ -15,7 +15,9 @@ use crate::rayfile;
 use crate::scene::{Scene, SceneSource};
 use crate::shade::{Pixel, Shader, Tally, to_srgb8};
 use crate::tiles::{for_each_pixel, progress_bar};
-use accel_core::{Accelerator, MollerTrumboreMesh, PrimitiveSet, Real, TriangleMesh, TriangleTest};
+use accel_core::{
+    Accelerator, MollerTrumboreMesh, PrimitiveSet, QueryError, Real, TriangleMesh, TriangleTest,
+};
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -46,15 +48,32 @@ pub(crate) fn check_png_name(path: &Path, option: &str) -> Result<()> {
     Ok(())
 }
 
-/// The mesh in the query precision.
+/// The mesh in the query precision, refused (naming the scene, and
+/// `--precision f64` in `f32`) when a coordinate does not fit `T` or lies
+/// beyond the range the accelerators accept ([`Real::LIMIT`]): every
+/// structure, brute force included, would refuse it.
 pub(crate) fn mesh_in<T: Real>(scene: &Scene) -> Result<TriangleMesh<T>> {
-    scene.mesh.cast::<T>().with_context(|| {
+    let mesh = scene.mesh.cast::<T>().with_context(|| {
         format!(
             "{}: the scene does not fit in {} (use --precision f64)",
             scene.name,
             T::NAME
         )
-    })
+    })?;
+    if let Err(e) = accel_core::check_range(&mesh.bounds()) {
+        bail!("{}: {e}{}", scene.name, precision_hint::<T>());
+    }
+    Ok(mesh)
+}
+
+/// ` (use --precision f64)` in `f32`, where a wider precision is the remedy
+/// for coordinates out of range; nothing in `f64`.
+pub(crate) fn precision_hint<T: Real>() -> &'static str {
+    if T::NAME == "f32" {
+        " (use --precision f64)"
+    } else {
+        ""
+    }
 }
 
 /// Loads the scene named by a SCENE argument, reporting how long it took.
@@ -189,9 +208,13 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let bar = progress_bar(u64::from(w) * u64::from(h), "render");
     let start = Instant::now();
     let pixels = for_each_pixel(w, h, &bar, |x, y| {
-        shader
-            .pixel(x, y)
-            .with_context(|| format!("pixel ({x}, {y}) in {}", T::NAME))
+        shader.pixel(x, y).map_err(|e| {
+            let hint = match e {
+                QueryError::OriginOutOfRange { .. } => precision_hint::<T>(),
+                _ => "",
+            };
+            anyhow::anyhow!("pixel ({x}, {y}) in {}: {e}{hint}", T::NAME)
+        })
     })?;
     let elapsed = start.elapsed();
     bar.finish_and_clear();

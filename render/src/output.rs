@@ -1,9 +1,14 @@
 //! Output files written whole or not at all.
 //!
-//! A [`PendingFile`] is a temporary file in the destination's directory
-//! (created up front, so an unwritable path fails before any work is done).
-//! [`PendingFile::commit`] renames it over the destination; dropping it
-//! uncommitted, on any error, deletes it. A reader never sees a partial file.
+//! A [`PendingFile`] is a destination checked up front ([`PendingFile::create`]
+//! proves its directory writable, so an unwritable path fails before any work
+//! is done) and written only once the output is ready: each `write_*` method
+//! creates a temporary file in the destination's directory, fills it and
+//! renames it over the destination; on any error the temporary file is
+//! deleted. A reader never sees a partial file, and a run interrupted while
+//! it works (Ctrl-C, SIGTERM: no destructor runs) leaves no hidden
+//! `.NAME.XXXXXX.tmp` behind, since none exists until the writing starts
+//! (see: issue 32, item 4).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -45,15 +50,19 @@ pub enum OutputError {
     },
 }
 
-/// A file being written: a temporary file until [`PendingFile::commit`].
+/// A destination checked for writing; written, whole, by one of the
+/// `write_*` methods.
 #[derive(Debug)]
 pub struct PendingFile {
-    tmp: tempfile::NamedTempFile,
     dest: PathBuf,
+    dir: PathBuf,
+    name: String,
 }
 
 impl PendingFile {
-    /// Creates the temporary file beside `dest`.
+    /// Checks that `dest` can be written: not a directory, in an existing
+    /// directory where a file can be created (proved by creating a
+    /// temporary file there and deleting it at once). Nothing stays behind.
     ///
     /// # Errors
     /// [`OutputError`] if `dest` is a directory or its directory is missing or
@@ -78,21 +87,29 @@ impl PendingFile {
                 dir: dir.to_owned(),
             });
         }
-        let prefix = format!(".{name}.");
+        let pending = Self {
+            dest: dest.to_owned(),
+            dir: dir.to_owned(),
+            name,
+        };
+        // Dropped at once: the probe is deleted.
+        drop(pending.temporary()?);
+        Ok(pending)
+    }
+
+    /// A new temporary file beside the destination, named after it.
+    fn temporary(&self) -> Result<tempfile::NamedTempFile, OutputError> {
+        let prefix = format!(".{}.", self.name);
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(".tmp");
         // A temporary file is private (0600); the result should be an ordinary
         // file, readable as the umask allows, like one `File::create` makes.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-        let tmp = builder.tempfile_in(dir).map_err(|e| OutputError::Io {
-            path: dest.to_owned(),
+        builder.tempfile_in(&self.dir).map_err(|e| OutputError::Io {
+            path: self.dest.clone(),
             // tempfile's error names its random file name; the kind is what matters.
             source: std::io::Error::from(e.kind()),
-        })?;
-        Ok(Self {
-            tmp,
-            dest: dest.to_owned(),
         })
     }
 
@@ -112,23 +129,25 @@ impl PendingFile {
     /// Writes `bytes` and commits.
     ///
     /// # Errors
-    /// [`OutputError::Io`] if writing or renaming fails (the temporary file is
-    /// removed).
-    pub fn write_all(mut self, bytes: &[u8]) -> Result<(), OutputError> {
-        if let Err(e) = self.tmp.as_file_mut().write_all(bytes) {
+    /// [`OutputError::Io`] if creating, writing or renaming fails (the
+    /// temporary file is removed).
+    pub fn write_all(self, bytes: &[u8]) -> Result<(), OutputError> {
+        let mut tmp = self.temporary()?;
+        if let Err(e) = tmp.as_file_mut().write_all(bytes) {
             return Err(self.io_error(e));
         }
-        self.commit()
+        self.commit(tmp)
     }
 
     /// Encodes an 8-bit RGB image as PNG and commits.
     ///
     /// # Errors
-    /// [`OutputError`] if encoding, writing or renaming fails.
-    pub fn write_png(mut self, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
+    /// [`OutputError`] if encoding, creating, writing or renaming fails.
+    pub fn write_png(self, width: u32, height: u32, rgb: &[u8]) -> Result<(), OutputError> {
         use image::ImageEncoder;
+        let mut tmp = self.temporary()?;
         let result = {
-            let mut w = BufWriter::new(self.tmp.as_file_mut());
+            let mut w = BufWriter::new(tmp.as_file_mut());
             let r = image::codecs::png::PngEncoder::new(&mut w).write_image(
                 rgb,
                 width,
@@ -144,44 +163,39 @@ impl PendingFile {
                 message,
             });
         }
-        self.commit()
+        self.commit(tmp)
     }
 
-    /// Gives the temporary file to `f` (buffered), then commits.
+    /// Gives a new temporary file to `f` (buffered), then commits.
     ///
     /// # Errors
-    /// [`OutputError::Io`] if `f`, flushing or renaming fails.
+    /// [`OutputError::Io`] if creating, `f`, flushing or renaming fails.
     pub fn write_with(
-        mut self,
+        self,
         f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     ) -> Result<(), OutputError> {
+        let mut tmp = self.temporary()?;
         let result = {
-            let mut w = BufWriter::new(self.tmp.as_file_mut());
+            let mut w = BufWriter::new(tmp.as_file_mut());
             f(&mut w).and_then(|()| w.flush())
         };
         match result {
-            Ok(()) => self.commit(),
+            Ok(()) => self.commit(tmp),
             Err(e) => Err(self.io_error(e)),
         }
     }
 
-    /// Flushes to disk and renames the temporary file over the destination.
-    ///
-    /// # Errors
-    /// [`OutputError::Io`] if syncing or renaming fails.
-    pub fn commit(self) -> Result<(), OutputError> {
-        let file: &File = self.tmp.as_file();
+    /// Flushes `tmp` to disk and renames it over the destination.
+    fn commit(self, tmp: tempfile::NamedTempFile) -> Result<(), OutputError> {
+        let file: &File = tmp.as_file();
         if let Err(e) = file.sync_all() {
             return Err(self.io_error(e));
         }
         let dest = self.dest;
-        self.tmp
-            .persist(&dest)
-            .map(drop)
-            .map_err(|e| OutputError::Io {
-                path: dest,
-                source: e.error,
-            })
+        tmp.persist(&dest).map(drop).map_err(|e| OutputError::Io {
+            path: dest,
+            source: e.error,
+        })
     }
 }
 
@@ -198,15 +212,23 @@ mod tests {
         v
     }
 
+    /// See: issue 32, item 4. A checked destination holds no temporary file
+    /// while the work runs (an interrupted run, whose destructors never run,
+    /// leaves nothing), and neither a failed nor a finished write leaves one.
     #[test]
-    fn nothing_appears_until_commit_and_nothing_stays_after_drop() {
+    fn no_temporary_file_exists_before_or_after_writing() {
         let dir = tempfile::tempdir().unwrap();
         let dest = dir.path().join("a.bin");
         let pending = PendingFile::create(&dest).unwrap();
         assert!(!dest.exists());
-        assert_eq!(entries(dir.path()).len(), 1, "only the temporary file");
+        assert!(entries(dir.path()).is_empty(), "nothing while working");
         drop(pending);
         assert!(entries(dir.path()).is_empty());
+        let failed = PendingFile::create(&dest)
+            .unwrap()
+            .write_with(|_| Err(std::io::Error::other("the encoder gave up")));
+        assert!(failed.unwrap_err().to_string().contains("gave up"));
+        assert!(entries(dir.path()).is_empty(), "nothing after a failure");
         PendingFile::create(&dest)
             .unwrap()
             .write_all(b"whole")

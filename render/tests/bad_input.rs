@@ -297,3 +297,103 @@ fn absurd_sizes_and_unknown_options() {
         assert!(entries(dir.path()).is_empty(), "{args:?}");
     }
 }
+
+/// A square with every coordinate at `±a` (finite in `f32`).
+fn square_at(a: f32) -> [[f32; 3]; 4] {
+    [[-a, -a, -a], [a, -a, -a], [-a, a, a], [a, a, a]]
+}
+
+/// See: issue 32, item 1. A glTF at ±3e38 (finite `f32`, its extent is not)
+/// made `--accel grid|octree` panic and the others fail on "ray origin is not
+/// finite": now every accelerator refuses it in `f32`, naming the scene, the
+/// limit and `--precision f64`, which renders it.
+#[test]
+fn finite_extremes_name_the_limit_and_the_remedy() {
+    let dir = tempfile::tempdir().unwrap();
+    Gltf {
+        positions: &square_at(3e38),
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "huge.gltf");
+    for accel in ["grid", "octree", "kdtree", "brute", "auto"] {
+        let scene = "huge.gltf";
+        let out = dir.path().join("out.png");
+        std::fs::write(&out, b"old picture").unwrap();
+        let before = entries(dir.path());
+        let mut args = vec![scene, "--accel", accel, "--out", "out.png"];
+        args.extend(TINY);
+        let o = run(dir.path(), &args);
+        assert_refused(
+            &o,
+            &[
+                "huge.gltf",
+                "3e38",
+                "largest f32 coordinate",
+                "--precision f64",
+            ],
+        );
+        assert_eq!(std::fs::read(&out).unwrap(), b"old picture", "{accel}");
+        assert_eq!(entries(dir.path()), before, "{accel}: files left behind");
+        args.extend(["--precision", "f64"]);
+        let o = run(dir.path(), &args);
+        assert!(o.status.success(), "{accel} in f64: {}", common::stderr(&o));
+        assert_ne!(std::fs::read(&out).unwrap(), b"old picture", "{accel}");
+    }
+}
+
+/// Just inside the `f32` limit (1e37, the limit is about 2.1e37) a scene
+/// either renders or is refused in one line with the remedy: the camera,
+/// framed around the scene, may stand beyond the limit.
+#[test]
+fn scenes_inside_the_f32_limit_render_or_name_the_remedy() {
+    let dir = tempfile::tempdir().unwrap();
+    Gltf {
+        positions: &square_at(1e37),
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "big.gltf");
+    for accel in ["grid", "octree", "kdtree", "brute"] {
+        let mut args = vec!["big.gltf", "--accel", accel, "--out", "out.png"];
+        args.extend(TINY);
+        let o = run(dir.path(), &args);
+        if !o.status.success() {
+            assert_refused(&o, &["ray origin is beyond", "--precision f64"]);
+        }
+    }
+}
+
+/// See: issue 32, item 4. A run killed while it traces (SIGKILL: no
+/// destructor runs, as after an unhandled Ctrl-C or SIGTERM) leaves no hidden
+/// `.out.png.XXXXXX.tmp` behind: the outputs were checked before the work
+/// began, but no temporary file exists until the picture is written.
+#[test]
+fn an_interrupted_run_leaves_no_temporary_file() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_render"))
+        .current_dir(dir.path())
+        .args(["--out", "out.png", "--heatmap=heat.png"])
+        .args(["--width", "1024", "--height", "1024", "--ao", "16"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    // The structure is built: tracing starts next (seconds of work).
+    let tracing = lines.map_while(Result::ok).any(|l| l.starts_with("build "));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(tracing, "premise: the run got as far as tracing");
+    assert!(
+        !dir.path().join("out.png").exists(),
+        "premise: killed before the picture was written"
+    );
+    assert_eq!(entries(dir.path()), Vec::<String>::new());
+}

@@ -17,6 +17,7 @@
 //! - [`assertions`], [`suite`]: the checks, returning readable messages.
 //! - [`watertight`]: rays aimed at shared edges and vertices of closed meshes.
 //! - [`bad_input`]: invalid rays and regions, non-finite scenes.
+//! - [`limits`]: scenes stretched to the largest finite coordinates.
 //! - [`Mixed`]: a user-defined primitive (triangles and spheres in one set).
 //!
 //! The properties live in `tests/`; `PROPTEST_CASES` sets the number of cases
@@ -27,6 +28,7 @@ pub mod bad_input;
 pub mod boxes;
 pub mod config;
 pub mod landmarks;
+pub mod limits;
 mod mixed;
 pub mod rays;
 pub mod registry;

@@ -165,7 +165,7 @@ pub fn enclosing_region_params<T: Real, P: PrimitiveSet<T> + ?Sized>(
 
 /// The box [`enclosing_region_params`] uses: the scene's bounds grown by
 /// 13% of their largest extent below and 29% above (a unit box at the origin
-/// for an empty scene).
+/// for an empty scene), clamped into `±T::LIMIT` ([`Real::LIMIT`]).
 ///
 /// # Errors
 /// [`BuildError::NonFinitePrimitive`] for a non-finite scene.
@@ -180,9 +180,10 @@ pub fn enclosing_region<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let below = T::from_f64(0.13) * extent;
     let above = T::from_f64(0.29) * extent;
     // Subtracting (adding) a non-negative margin rounds to a value at or below
-    // min (at or above max): the region always holds the scene.
+    // min (at or above max): the region always holds the scene. Clamped into
+    // ±T::LIMIT, the range a build accepts (a scene near it gets less margin).
     Ok(Aabb {
-        min: b.min - Vec3::splat(below),
-        max: b.max + Vec3::splat(above),
+        min: (b.min - Vec3::splat(below)).map(|x| x.max(-T::LIMIT)),
+        max: (b.max + Vec3::splat(above)).map(|x| x.min(T::LIMIT)),
     })
 }
