@@ -526,6 +526,32 @@ fn check_buffer_uris(
     Ok(files)
 }
 
+/// Refuses a mesh attribute that names an accessor the file does not have.
+fn check_attribute_indices(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &primitive.attributes {
+                if index.value() >= accessors {
+                    let name = match semantic {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "an unknown".to_owned(),
+                    };
+                    return Err(LoadError::Gltf {
+                        path: path.to_owned(),
+                        message: format!(
+                            "not a valid glTF file: mesh {m} primitive {p}: the {name} attribute \
+                             names accessor {}, but the file has {accessors}",
+                            index.value()
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Every buffer's bytes, never more than its declared `byteLength`: an
 /// external file is read through a limit of that length (a regular file in
 /// the folder, [`check_buffer_uris`]), `data:` URIs and the binary chunk
@@ -596,8 +622,16 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             e => format!("not a valid glTF file: {e}"),
         },
     };
+    let file = std::fs::File::open(path).map_err(|e| gltf_error("the file", gltf::Error::Io(e)))?;
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::open(path).map_err(|e| gltf_error("the file", e))?;
+        gltf::Gltf::from_reader_without_validation(std::io::BufReader::new(file))
+            .map_err(|e| gltf_error("the file", e))?;
+    // gltf-json 1.4's validation indexes the POSITION accessor before it
+    // checks the index (a panic for an index past the accessors, found by
+    // render's mutated_inputs test): checked here first, then validated.
+    check_attribute_indices(path, document.as_json())?;
+    let document =
+        gltf::Document::from_json(document.into_json()).map_err(|e| gltf_error("the file", e))?;
     let files = check_buffer_uris(path, &document)?;
     let buffers = read_buffers(path, &document, &files, blob)?;
     let mut loader = Loader {
@@ -858,6 +892,28 @@ mod tests {
         let path = square_under(&dir, "deep.gltf", &format!("[{}]", chain.join(",")));
         let text = load(&path).unwrap_err().to_string();
         assert!(text.contains("once composed with its ancestors'"), "{text}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// See: issue 32, item 7 (found by render's `mutated_inputs`): a POSITION
+    /// attribute naming an accessor past the last made gltf-json's
+    /// validation index out of bounds and panic.
+    #[test]
+    fn attributes_naming_missing_accessors_are_refused() {
+        let dir = std::env::temp_dir().join(format!("accel-core-gltf-attr-{}", std::process::id()));
+        let path = write_gltf(
+            &dir,
+            "attr.gltf",
+            &square(),
+            r#"[{"buffer":0,"byteLength":48}]"#,
+            &format!("[{POS}]"),
+            r#"[{"primitives":[{"attributes":{"POSITION":3}}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        let text = load(&path).unwrap_err().to_string();
+        for needle in ["attr.gltf", "POSITION attribute names accessor 3", "has 1"] {
+            assert!(text.contains(needle), "{needle:?} not in {text}");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 
