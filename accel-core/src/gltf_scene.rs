@@ -600,7 +600,7 @@ fn read_buffers(
         }
         data.truncate(declared);
         // As the glTF reader does: a multiple of four bytes.
-        while data.len() % 4 != 0 {
+        while !data.len().is_multiple_of(4) {
             data.push(0);
         }
         buffers.push(gltf::buffer::Data(data));
