@@ -32,11 +32,14 @@ pub enum BuildError {
         expected: &'static str,
     },
     /// The structure would exceed a memory budget.
-    #[error("{what}: {needed} needed, over the budget of {budget}")]
+    #[error("{what}: at least {needed} needed, over the budget of {budget}")]
     BudgetExceeded {
         /// What was counted (cells, references, bytes).
         what: &'static str,
-        /// How many the build needs.
+        /// How many the build needs, or, where the build stopped counting
+        /// the moment it passed the budget (a grid's references), how many
+        /// it had counted by then: always more than `budget`, at most the
+        /// whole need.
         needed: u64,
         /// The configured budget.
         budget: u64,

@@ -65,6 +65,22 @@ pub enum LoadError {
         /// What is wrong with it.
         problem: String,
     },
+    /// A node's transform (its matrix, or translation, rotation and scale),
+    /// alone or composed with its ancestors', is not finite: a value past
+    /// the `f32` range such as a translation of 1e39 reads as infinity.
+    #[error(
+        "{path}: node {node}'s transform {problem} (a matrix, translation, rotation or scale \
+         value past the f32 range, about 3.4e38, reads as infinity)"
+    )]
+    BadTransform {
+        /// The file.
+        path: PathBuf,
+        /// Node index (and name, when it has one).
+        node: String,
+        /// `is not finite`, or `is not finite once composed with its
+        /// ancestors'`.
+        problem: &'static str,
+    },
     /// A node is its own ancestor.
     #[error("{path}: node {node} is its own ancestor (the node hierarchy has a cycle)")]
     NodeCycle {
@@ -135,6 +151,14 @@ fn mesh_label(mesh: &gltf::Mesh<'_>) -> String {
 }
 
 /// Triangles from a vertex list in the primitive's mode.
+/// `3`, or `3 ("name")` for a named node.
+fn node_label(node: &gltf::Node<'_>) -> String {
+    match node.name() {
+        Some(name) => format!("{} ({name:?})", node.index()),
+        None => node.index().to_string(),
+    }
+}
+
 fn triangles(mode: gltf::mesh::Mode, idx: &[u32]) -> Vec<[u32; 3]> {
     use gltf::mesh::Mode;
     match mode {
@@ -267,6 +291,22 @@ impl Loader<'_> {
         }
         let local = glam::Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
         let world = parent * local;
+        // Blamed on the node, not on the first vertex it would move to
+        // infinity (issue 32, item 5).
+        let problem = if !local.is_finite() {
+            Some("is not finite")
+        } else if !world.is_finite() {
+            Some("is not finite once composed with its ancestors'")
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(LoadError::BadTransform {
+                path: self.path.to_owned(),
+                node: node_label(node),
+                problem,
+            });
+        }
         if let Some(mesh) = node.mesh() {
             self.mesh(&mesh, &world)?;
         }
@@ -407,18 +447,26 @@ impl Loader<'_> {
 /// without end (issue 32, item 2): a security rule, not a glTF one. An
 /// external buffer must be a relative path with no `..` component, no
 /// scheme but `data:`, naming a regular file (not `/dev/zero`, a FIFO or a
-/// symlink to one), so a read is bounded by that file's size.
-fn check_buffer_uris(path: &Path, document: &gltf::Document) -> Result<(), LoadError> {
+/// symlink to one) that, symbolic links resolved, still lies in the folder.
+/// The file of each external buffer, in buffer order (`None` for `data:`
+/// URIs and the binary chunk).
+fn check_buffer_uris(
+    path: &Path,
+    document: &gltf::Document,
+) -> Result<Vec<Option<PathBuf>>, LoadError> {
     let refuse = |index: usize, uri: &str, why: &str| LoadError::Gltf {
         path: path.to_owned(),
         message: format!("buffer {index} uri {uri:?} refused: {why}"),
     };
     let folder = path.parent().unwrap_or(Path::new("."));
+    let mut files = Vec::new();
     for buffer in document.buffers() {
         let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+            files.push(None);
             continue;
         };
         if uri.starts_with("data:") {
+            files.push(None);
             continue;
         }
         let index = buffer.index();
@@ -451,19 +499,113 @@ fn check_buffer_uris(path: &Path, document: &gltf::Document) -> Result<(), LoadE
             return Err(refuse(index, uri, "it leaves the file's folder"));
         }
         let target = folder.join(relative);
+        let cannot_read = |e: std::io::Error| LoadError::Gltf {
+            path: path.to_owned(),
+            message: format!(
+                "buffer {index} file {} cannot be read: {e}",
+                target.display()
+            ),
+        };
         match std::fs::metadata(&target) {
             Ok(meta) if meta.is_file() => {}
             Ok(_) => return Err(refuse(index, uri, "not a regular file")),
-            Err(e) => {
-                return Err(refuse(
-                    index,
-                    uri,
-                    &format!("cannot read {}: {e}", target.display()),
-                ));
+            Err(e) => return Err(cannot_read(e)),
+        }
+        // A symbolic link (the file or a folder on the way) may lead out.
+        let real = std::fs::canonicalize(&target).map_err(cannot_read)?;
+        let real_folder = std::fs::canonicalize(folder).map_err(cannot_read)?;
+        if !real.starts_with(&real_folder) {
+            return Err(refuse(
+                index,
+                uri,
+                "a symbolic link leads out of the file's folder",
+            ));
+        }
+        files.push(Some(real));
+    }
+    Ok(files)
+}
+
+/// Refuses a mesh attribute that names an accessor the file does not have.
+fn check_attribute_indices(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &primitive.attributes {
+                if index.value() >= accessors {
+                    let name = match semantic {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "an unknown".to_owned(),
+                    };
+                    return Err(LoadError::Gltf {
+                        path: path.to_owned(),
+                        message: format!(
+                            "not a valid glTF file: mesh {m} primitive {p}: the {name} attribute \
+                             names accessor {}, but the file has {accessors}",
+                            index.value()
+                        ),
+                    });
+                }
             }
         }
     }
     Ok(())
+}
+
+/// Every buffer's bytes, never more than its declared `byteLength`: an
+/// external file is read through a limit of that length (a regular file in
+/// the folder, [`check_buffer_uris`]), `data:` URIs and the binary chunk
+/// (both inside the file already read) by the glTF reader. A buffer shorter
+/// than its `byteLength` is refused, naming both lengths.
+fn read_buffers(
+    path: &Path,
+    document: &gltf::Document,
+    files: &[Option<PathBuf>],
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<gltf::buffer::Data>, LoadError> {
+    use std::io::Read;
+    let fail = |message: String| LoadError::Gltf {
+        path: path.to_owned(),
+        message,
+    };
+    let mut buffers = Vec::new();
+    for (buffer, file) in document.buffers().zip(files) {
+        let index = buffer.index();
+        let declared = buffer.length();
+        let mut data = match file {
+            Some(file) => {
+                let cannot = |e: std::io::Error| {
+                    fail(format!(
+                        "buffer {index} file {} cannot be read: {e}",
+                        file.display()
+                    ))
+                };
+                let mut data = Vec::new();
+                std::fs::File::open(file)
+                    .and_then(|f| f.take(declared as u64).read_to_end(&mut data))
+                    .map_err(cannot)?;
+                data
+            }
+            None => {
+                gltf::buffer::Data::from_source_and_blob(buffer.source(), None, &mut blob)
+                    .map_err(|e| fail(format!("buffer {index} cannot be read: {e}")))?
+                    .0
+            }
+        };
+        if data.len() < declared {
+            return Err(fail(format!(
+                "buffer {index} holds {} bytes, fewer than its byteLength of {declared}",
+                data.len()
+            )));
+        }
+        data.truncate(declared);
+        // As the glTF reader does: a multiple of four bytes.
+        while !data.len().is_multiple_of(4) {
+            data.push(0);
+        }
+        buffers.push(gltf::buffer::Data(data));
+    }
+    Ok(buffers)
 }
 
 /// Loads a `.gltf` or `.glb` file.
@@ -480,12 +622,18 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             e => format!("not a valid glTF file: {e}"),
         },
     };
+    let file = std::fs::File::open(path).map_err(|e| gltf_error("the file", gltf::Error::Io(e)))?;
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::open(path).map_err(|e| gltf_error("the file", e))?;
-    let base = path.parent();
-    check_buffer_uris(path, &document)?;
-    let buffers =
-        gltf::import_buffers(&document, base, blob).map_err(|e| gltf_error("its buffers", e))?;
+        gltf::Gltf::from_reader_without_validation(std::io::BufReader::new(file))
+            .map_err(|e| gltf_error("the file", e))?;
+    // gltf-json 1.4's validation indexes the POSITION accessor before it
+    // checks the index (a panic for an index past the accessors, found by
+    // render's mutated_inputs test): checked here first, then validated.
+    check_attribute_indices(path, document.as_json())?;
+    let document =
+        gltf::Document::from_json(document.into_json()).map_err(|e| gltf_error("the file", e))?;
+    let files = check_buffer_uris(path, &document)?;
+    let buffers = read_buffers(path, &document, &files, blob)?;
     let mut loader = Loader {
         path,
         buffers: &buffers,
@@ -696,6 +844,148 @@ mod tests {
         assert_eq!(scene.mesh.triangle_count(), 4);
         let b = scene.mesh.bounds();
         assert_eq!((b.min.x, b.max.x, b.max.y), (0.0, 7.0, 2.0));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The square as one mesh under `nodes`, its buffer inline.
+    fn square_under(dir: &Path, name: &str, nodes: &str) -> PathBuf {
+        write_gltf(
+            dir,
+            name,
+            &square(),
+            r#"[{"buffer":0,"byteLength":48}]"#,
+            &format!("[{POS}]"),
+            r#"[{"primitives":[{"attributes":{"POSITION":0}}]}]"#,
+            nodes,
+        )
+    }
+
+    /// See: issue 32, item 5. A translation of 1e39 (infinite once read as
+    /// `f32`) was blamed on the first vertex it moved; it is the node's.
+    #[test]
+    fn non_finite_transforms_are_blamed_on_their_node() {
+        let dir =
+            std::env::temp_dir().join(format!("accel-core-gltf-xform-{}", std::process::id()));
+        let path = square_under(
+            &dir,
+            "far.gltf",
+            r#"[{"children":[1]},{"name":"far","mesh":0,"translation":[1e39,0,0]}]"#,
+        );
+        let err = load(&path).unwrap_err();
+        assert!(matches!(err, LoadError::BadTransform { .. }), "{err}");
+        let text = err.to_string();
+        for needle in ["far.gltf", "node 1 (\"far\")", "is not finite", "f32 range"] {
+            assert!(text.contains(needle), "{needle:?} not in {text}");
+        }
+        assert!(!text.contains("vertex"), "{text}");
+        // Finite scales whose product overflows f64: nine levels of 1e38.
+        let chain: Vec<String> = (0..9)
+            .map(|i| {
+                let link = if i < 8 {
+                    format!(r#""children":[{}]"#, i + 1)
+                } else {
+                    r#""mesh":0"#.to_owned()
+                };
+                format!(r#"{{{link},"scale":[1e38,1e38,1e38]}}"#)
+            })
+            .collect();
+        let path = square_under(&dir, "deep.gltf", &format!("[{}]", chain.join(",")));
+        let text = load(&path).unwrap_err().to_string();
+        assert!(text.contains("once composed with its ancestors'"), "{text}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// See: issue 32, item 7 (found by render's `mutated_inputs`): a POSITION
+    /// attribute naming an accessor past the last made gltf-json's
+    /// validation index out of bounds and panic.
+    #[test]
+    fn attributes_naming_missing_accessors_are_refused() {
+        let dir = std::env::temp_dir().join(format!("accel-core-gltf-attr-{}", std::process::id()));
+        let path = write_gltf(
+            &dir,
+            "attr.gltf",
+            &square(),
+            r#"[{"buffer":0,"byteLength":48}]"#,
+            &format!("[{POS}]"),
+            r#"[{"primitives":[{"attributes":{"POSITION":3}}]}]"#,
+            r#"[{"mesh":0}]"#,
+        );
+        let text = load(&path).unwrap_err().to_string();
+        for needle in ["attr.gltf", "POSITION attribute names accessor 3", "has 1"] {
+            assert!(text.contains(needle), "{needle:?} not in {text}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A `.gltf` whose one buffer is the file `uri` of `byte_length` bytes,
+    /// holding the square.
+    fn external(dir: &Path, name: &str, uri: &str, byte_length: usize) -> PathBuf {
+        let path = dir.join(name);
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+            "buffers":[{{"byteLength":{byte_length},"uri":"{uri}"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":48}}],"accessors":[{POS}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],"nodes":[{{"mesh":0}}]}}"#
+        );
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    /// See: issue 32, items 2 and 5. A missing buffer file is named; a file
+    /// shorter than its `byteLength` is refused with both lengths; a longer
+    /// one is read only up to it.
+    #[test]
+    fn buffer_files_are_named_and_read_only_to_their_declared_length() {
+        let dir = std::env::temp_dir().join(format!("accel-core-gltf-len-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = external(&dir, "absent.gltf", "absent.bin", 48);
+        let text = load(&path).unwrap_err().to_string();
+        assert!(
+            text.contains("absent.gltf")
+                && text.contains("absent.bin")
+                && text.contains("cannot be read"),
+            "{text}"
+        );
+        std::fs::write(dir.join("short.bin"), &square()[..12]).unwrap();
+        let path = external(&dir, "short.gltf", "short.bin", 48);
+        let text = load(&path).unwrap_err().to_string();
+        assert!(
+            text.contains("holds 12 bytes, fewer than its byteLength of 48"),
+            "{text}"
+        );
+        let mut long = square();
+        long.resize(1 << 20, 7);
+        std::fs::write(dir.join("long.bin"), &long).unwrap();
+        let path = external(&dir, "long.gltf", "long.bin", 48);
+        assert_eq!(load(&path).unwrap().mesh.triangle_count(), 1);
+        let gltf::Gltf { document, blob } = gltf::Gltf::open(&path).unwrap();
+        let files = check_buffer_uris(&path, &document).unwrap();
+        let buffers = read_buffers(&path, &document, &files, blob).unwrap();
+        assert_eq!(buffers[0].0.len(), 48, "read past the byteLength");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// See: issue 32, item 2. A buffer file that is a symbolic link out of
+    /// the file's folder is refused, even to a regular file; one that stays
+    /// inside is read.
+    #[cfg(unix)]
+    #[test]
+    fn symbolic_links_out_of_the_folder_are_refused() {
+        let dir = std::env::temp_dir().join(format!("accel-core-gltf-link-{}", std::process::id()));
+        let inner = dir.join("scene");
+        std::fs::create_dir_all(&inner).unwrap();
+        std::fs::write(dir.join("outside.bin"), square()).unwrap();
+        std::fs::write(inner.join("inside.bin"), square()).unwrap();
+        std::os::unix::fs::symlink("../outside.bin", inner.join("out.bin")).unwrap();
+        std::os::unix::fs::symlink("inside.bin", inner.join("in.bin")).unwrap();
+        let path = external(&inner, "out.gltf", "out.bin", 48);
+        let text = load(&path).unwrap_err().to_string();
+        assert!(
+            text.contains("out.bin") && text.contains("symbolic link"),
+            "{text}"
+        );
+        let path = external(&inner, "in.gltf", "in.bin", 48);
+        assert_eq!(load(&path).unwrap().mesh.triangle_count(), 1);
         std::fs::remove_dir_all(&dir).ok();
     }
 

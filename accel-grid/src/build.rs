@@ -6,6 +6,7 @@ use crate::csr::{CellLists, CellVisitor};
 use crate::resolution::resolution;
 use accel_core::packed::{Layout, PackedTriangles};
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, bounds_union};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Build parameters of a [`crate::Grid`].
@@ -185,6 +186,53 @@ pub const BLOCK_SHIFT: u32 = 2;
 /// The default of [`GridParams::layout`].
 pub const DEFAULT_LAYOUT: Layout = Layout::Indexed;
 
+/// Primitives whose cells [`check_reference_estimate`] counts.
+pub const REFERENCE_SAMPLE: usize = 256;
+
+/// Refuses, before the cell lists are made, a build whose references
+/// clearly pass `budget`: the cells of [`REFERENCE_SAMPLE`] primitives
+/// spread evenly over the `n` (every `n / 256`-th) are counted, and an
+/// estimate of more than twice the budget is refused with it.
+///
+/// The exact build also stops the moment it passes the budget, but only
+/// after enumerating (and testing) every cell of the primitives before that
+/// point: 100,000 copies of one triangle across the scene took minutes to be
+/// refused that way (issue 32, item 3), and this sample takes 256 of them.
+/// A scene of up to four samples' worth of primitives is left to the exact
+/// build; between the budget and twice it, so is a scene the sample might
+/// overestimate.
+///
+/// # Errors
+/// [`BuildError::BudgetExceeded`] with the estimate.
+fn check_reference_estimate<V: CellVisitor>(
+    visitor: &V,
+    n: usize,
+    budget: u64,
+) -> Result<(), BuildError> {
+    if n <= 4 * REFERENCE_SAMPLE {
+        return Ok(());
+    }
+    let stride = n / REFERENCE_SAMPLE;
+    let counted: u64 = (0..REFERENCE_SAMPLE)
+        .into_par_iter()
+        .map(|k| {
+            let mut cells = 0u64;
+            // Below n: k·stride + stride/2 < 256·stride <= n.
+            visitor.visit((k * stride + stride / 2) as u32, |_| cells += 1);
+            cells
+        })
+        .sum();
+    let estimate = counted as f64 * (n as f64 / REFERENCE_SAMPLE as f64);
+    if estimate > 2.0 * budget as f64 {
+        return Err(BuildError::BudgetExceeded {
+            what: "cell references (estimated from 256 primitives spread over the scene)",
+            needed: estimate as u64,
+            budget,
+        });
+    }
+    Ok(())
+}
+
 /// Builds the geometry and cell lists of a grid over `prims`.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
@@ -215,6 +263,7 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         bounds: None,
         region: params.region.as_ref(),
     };
+    check_reference_estimate(&visitor, prims.len(), params.max_references)?;
     let cells = CellLists::build(
         geometry.cell_count(),
         prims.len() as u32,

@@ -28,6 +28,8 @@ pub mod limits {
     pub const MAX_THREADS: usize = 1_024;
     /// Largest rays traced for one render: pixels × spp × (2 + ao).
     pub const MAX_RAYS: u64 = 1 << 36;
+    /// Default `--memory-budget`, in GiB.
+    pub const MEMORY_BUDGET_GIB: f64 = 8.0;
 }
 
 /// Render a glTF file or a built-in scene with any accelerator, or benchmark
@@ -146,6 +148,11 @@ pub struct RenderArgs {
     /// Worker threads [default: all cores].
     #[arg(long, value_parser = threads_parser(), allow_negative_numbers = true)]
     pub threads: Option<usize>,
+    /// Memory the render's image buffers may take, in GiB: a render whose
+    /// estimate (bytes per pixel × pixels) is larger is refused, with the
+    /// figure, before any work.
+    #[arg(long, value_name = "GIB", default_value_t = limits::MEMORY_BUDGET_GIB, value_parser = memory_budget_parser, allow_negative_numbers = true)]
+    pub memory_budget: f64,
     /// The speed-against-accuracy dials.
     #[command(flatten)]
     pub dials: DialArgs,
@@ -538,6 +545,19 @@ pub fn min_time_parser(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("{v} is not in 0..=3600 seconds"))
+    }
+}
+
+/// Parses `--memory-budget`: a finite number of GiB above 0.
+///
+/// # Errors
+/// A message for anything else.
+pub fn memory_budget_parser(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not a number of GiB above 0"))
     }
 }
 

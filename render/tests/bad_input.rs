@@ -113,7 +113,8 @@ fn nan_vertices_and_empty_scenes() {
         "nan.gltf",
         &["nan.gltf", "vertex 2", "non-finite"],
     );
-    // A matrix with an infinity makes every vertex non-finite.
+    // A scale past the f32 range reads as infinity: blamed on the node,
+    // not on the vertices it would move (issue 32, item 5).
     Gltf {
         positions: &SQUARE,
         indices: Some(&SQUARE_INDICES),
@@ -122,7 +123,11 @@ fn nan_vertices_and_empty_scenes() {
         extra: "",
     }
     .write(dir.path(), "inf.gltf");
-    refuse_scene(dir.path(), "inf.gltf", &["inf.gltf", "non-finite"]);
+    refuse_scene(
+        dir.path(),
+        "inf.gltf",
+        &["inf.gltf", "node 0's transform is not finite"],
+    );
     // Nodes without meshes: nothing to render.
     Gltf {
         positions: &SQUARE,
@@ -396,4 +401,46 @@ fn an_interrupted_run_leaves_no_temporary_file() {
         "premise: killed before the picture was written"
     );
     assert_eq!(entries(dir.path()), Vec::<String>::new());
+}
+
+/// See: issue 32, item 3. `--width 8192 --height 8192` passed the 64-Mpx
+/// cap but needed about 13 GiB: the estimate is refused against
+/// `--memory-budget` (8 GiB by default) before the scene is even loaded, and
+/// a smaller budget refuses smaller renders the same way.
+#[test]
+fn renders_over_the_memory_budget_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needles) in [
+        (
+            &["--width", "8192", "--height", "8192"][..],
+            &[
+                "8192",
+                "13.0 GiB",
+                "208 bytes a pixel",
+                "--memory-budget of 8 GiB",
+            ][..],
+        ),
+        (
+            &[
+                "--width",
+                "64",
+                "--height",
+                "64",
+                "--memory-budget",
+                "0.0001",
+            ],
+            &["64", "--memory-budget of 0.0001 GiB"],
+        ),
+    ] {
+        let o = run(dir.path(), args);
+        assert_refused(&o, needles);
+        assert!(common::stdout(&o).is_empty(), "{}", common::stdout(&o));
+        assert!(entries(dir.path()).is_empty());
+    }
+    let o = run(dir.path(), &["--memory-budget", "nan"]);
+    assert_refused(&o, &["--memory-budget", "not a number of GiB"]);
+    let mut args = vec!["--memory-budget", "0.01", "--out", "ok.png"];
+    args.extend(TINY);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
 }
