@@ -266,13 +266,14 @@ impl<T: Real> PackedTriangles<T> {
         ray: &PreparedRay<T>,
         mut test: impl FnMut(u32) -> bool,
     ) -> bool {
-        let first = self.first_block[start] as usize;
-        let blocks = &self.blocks[first..first + list.len().div_ceil(LANES)];
-        let ray = BlockRay::new(ray);
         match simd_level() {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: simd_level reports AVX2 only when the CPU has it.
-            SimdLevel::Avx2 => unsafe { candidates_avx2(blocks, list, &ray, test) },
+            SimdLevel::Avx2 => {
+                let first = self.first_block[start] as usize;
+                let blocks = &self.blocks[first..first + list.len().div_ceil(LANES)];
+                // SAFETY: simd_level reports AVX2 only when the CPU has it.
+                unsafe { candidates_avx2(blocks, list, &BlockRay::new(ray), test) }
+            }
             // The portable block test measured slower than testing the
             // list one by one (the compiler keeps it scalar).
             _ => list.iter().any(|&p| test(p)),
