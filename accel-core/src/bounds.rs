@@ -40,6 +40,30 @@ pub fn primitive_bounds<T: Real, P: PrimitiveSet<T> + ?Sized>(
 pub fn bounds_union<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
 ) -> Result<Aabb<T>, BuildError> {
+    bounds_survey(prims).map(|s| s.bounds)
+}
+
+/// What one pass over a scene's primitive boxes learns: their union, and
+/// enough to tell a builder, without another pass, that the scene has no
+/// part to set apart ([`crate::parts::split_surveyed`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneSurvey<T> {
+    /// The union of every primitive's bounds.
+    pub bounds: Aabb<T>,
+    /// The largest side of any primitive's bounds.
+    pub widest: T,
+    /// Per axis, how many primitives' bounds are flat on it (zero extent).
+    pub flat: [usize; 3],
+}
+
+/// [`bounds_union`], with the rest of the [`SceneSurvey`] from the same
+/// pass.
+///
+/// # Errors
+/// As [`primitive_bounds`].
+pub fn bounds_survey<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+) -> Result<SceneSurvey<T>, BuildError> {
     check_count(prims)?;
     let n = prims.len();
     let total = (0..n.div_ceil(CHUNK))
@@ -52,7 +76,11 @@ pub fn bounds_union<T: Real, P: PrimitiveSet<T> + ?Sized>(
         .reduce(|| Union::EMPTY, Union::merge);
     total.checked(|| (0..n).position(|i| !prims.bounds(i).is_finite()))?;
     check_range(&total.bounds)?;
-    Ok(total.bounds)
+    Ok(SceneSurvey {
+        bounds: total.bounds,
+        widest: total.widest,
+        flat: total.flat.map(|c| c as usize),
+    })
 }
 
 /// Refuses a finite box that reaches beyond `±T::LIMIT` ([`Real::LIMIT`]):
@@ -99,6 +127,10 @@ fn check_count<T: Real, P: PrimitiveSet<T> + ?Sized>(prims: &P) -> Result<(), Bu
 #[derive(Clone, Copy, Debug)]
 struct Union<T> {
     bounds: Aabb<T>,
+    /// The largest side of any box added.
+    widest: T,
+    /// Per axis, how many boxes added were flat on it.
+    flat: [u32; 3],
     /// The sum of every corner times zero: zero while each corner is
     /// finite, NaN for good once one is not (`∞ · 0` and anything with a
     /// NaN are NaN), which the plain selects of the union would not show.
@@ -108,14 +140,19 @@ struct Union<T> {
 impl<T: Real> Union<T> {
     const EMPTY: Self = Self {
         bounds: Aabb::empty(),
+        widest: T::ZERO,
+        flat: [0; 3],
         probe: Vec3::splat(T::ZERO),
     };
 
     /// Adds one primitive's box.
     #[inline]
     fn add(self, b: &Aabb<T>) -> Self {
+        let side = (b.max - b.min).max_component();
         Self {
             bounds: selected_union(&self.bounds, b),
+            widest: greater(self.widest, side),
+            flat: [0, 1, 2].map(|a| self.flat[a] + u32::from(b.min[a] == b.max[a])),
             probe: self.probe + b.min * T::ZERO + b.max * T::ZERO,
         }
     }
@@ -124,6 +161,8 @@ impl<T: Real> Union<T> {
     fn merge(self, other: Self) -> Self {
         Self {
             bounds: selected_union(&self.bounds, &other.bounds),
+            widest: greater(self.widest, other.widest),
+            flat: [0, 1, 2].map(|a| self.flat[a] + other.flat[a]),
             probe: self.probe + other.probe,
         }
     }

@@ -74,7 +74,7 @@ pub use accelerator::{
     AccelStats, Accelerator, CostCounter, TraversalCounters, region_matches, region_search_box,
     validate_region,
 };
-pub use bounds::{bounds_union, check_range, primitive_bounds};
+pub use bounds::{SceneSurvey, bounds_survey, bounds_union, check_range, primitive_bounds};
 pub use brute::BruteForce;
 pub use error::BuildError;
 pub use hit::{Hit, PrimHit, nearer};

@@ -3,9 +3,11 @@
 use crate::blocks::Blocks;
 use crate::cells::GridGeometry;
 use crate::csr::{CellLists, CellVisitor};
+use crate::grid::GridPart;
 use crate::resolution::resolution;
 use accel_core::packed::{Layout, PackedTriangles};
-use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, bounds_union};
+use accel_core::parts::split_surveyed;
+use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, bounds_survey};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -40,6 +42,15 @@ pub struct GridParams<T> {
     /// as fast on the 100k soup; only the sphere's shadow and diffuse rays
     /// gained (1.1–1.25×). The answers are the same either way.
     pub layout: Layout,
+    /// Whether a small dense part of a large sparse scene, or a floor of
+    /// many primitives lying flat in one plane, gets a grid of its own
+    /// ([`accel_core::parts`], the rule the octree and the kD-tree follow):
+    /// one grid over a teapot in a stadium gives the teapot's cell all its
+    /// triangles, and rays leaving a floor walk the floor's cells, where
+    /// apart they miss its flat box. Queries walk the parts one after the
+    /// other. Default true; `false` is the seed's single grid. Ignored with
+    /// a [`GridParams::region`].
+    pub parts: bool,
 }
 
 impl<T: Real> Default for GridParams<T> {
@@ -51,6 +62,7 @@ impl<T: Real> Default for GridParams<T> {
             max_references: 1 << 28,
             skip_empty_blocks: true,
             layout: DEFAULT_LAYOUT,
+            parts: true,
         }
     }
 }
@@ -76,11 +88,9 @@ impl<T: Real> GridParams<T> {
 }
 
 /// What a build produces, before it is wrapped with its primitives.
-pub(crate) struct Built<T> {
-    pub(crate) geometry: GridGeometry<T>,
-    pub(crate) cells: CellLists,
-    pub(crate) blocks: Option<Blocks<T>>,
-    pub(crate) packed: Option<PackedTriangles<T>>,
+pub(crate) struct Built<T: Real> {
+    /// At least one; the first is the only one of a grid in one part.
+    pub(crate) parts: Vec<GridPart<T>>,
     pub(crate) stats: AccelStats,
 }
 
@@ -206,6 +216,7 @@ pub const REFERENCE_SAMPLE: usize = 256;
 /// [`BuildError::BudgetExceeded`] with the estimate.
 fn check_reference_estimate<V: CellVisitor>(
     visitor: &V,
+    items: Option<&[u32]>,
     n: usize,
     budget: u64,
 ) -> Result<(), BuildError> {
@@ -218,7 +229,9 @@ fn check_reference_estimate<V: CellVisitor>(
         .map(|k| {
             let mut cells = 0u64;
             // Below n: k·stride + stride/2 < 256·stride <= n.
-            visitor.visit((k * stride + stride / 2) as u32, |_| cells += 1);
+            let i = k * stride + stride / 2;
+            let item = items.map_or(i as u32, |items| items[i]);
+            visitor.visit(item, |_| cells += 1);
             cells
         })
         .sum();
@@ -233,14 +246,18 @@ fn check_reference_estimate<V: CellVisitor>(
     Ok(())
 }
 
-/// Builds the geometry and cell lists of a grid over `prims`.
+/// Builds the parts of a grid over `prims`: one grid over the whole scene
+/// (or the user's region), or, where [`GridParams::parts`] says so and the
+/// scene has them, a grid per part ([`accel_core::parts`]) sharing the
+/// cell and reference budgets.
 pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     prims: &P,
     params: &GridParams<T>,
 ) -> Result<Built<T>, BuildError> {
     let start = Instant::now();
-    let scene_bounds = bounds_union(prims)?;
-    let (grid_bounds, object_count) = match &params.region {
+    let survey = bounds_survey(prims)?;
+    let scene_bounds = survey.bounds;
+    let (groups, object_count) = match &params.region {
         Some(region) => {
             if !region.is_finite() || region.is_empty() {
                 return Err(BuildError::InvalidRegion);
@@ -250,26 +267,80 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             let count = (0..prims.len())
                 .filter(|&i| prims.bounds(i).overlaps(region) && prims.overlaps_box(i, region))
                 .count();
-            (*region, count)
+            (vec![(None, *region)], count)
         }
-        None if prims.is_empty() => (Aabb::from_point(accel_core::Vec3::ZERO), 0),
-        None => (scene_bounds, prims.len()),
+        None if prims.is_empty() => (vec![(None, Aabb::from_point(accel_core::Vec3::ZERO))], 0),
+        None if !params.parts => (vec![(None, scene_bounds)], prims.len()),
+        None => {
+            let groups = match split_surveyed(
+                prims.len(),
+                |i| prims.bounds(i),
+                &survey,
+                prims.wide_hits(),
+            ) {
+                Some(groups) => groups
+                    .into_iter()
+                    .map(|g| (Some(g.prims), g.bounds))
+                    .collect(),
+                None => vec![(None, scene_bounds)],
+            };
+            (groups, prims.len())
+        }
     };
-    let res = resolution(&grid_bounds, object_count, params.density, params.max_cells)?;
-    let geometry = GridGeometry::new(grid_bounds, res);
+    let mut parts = Vec::with_capacity(groups.len());
+    let (mut cells_left, mut refs_left) = (params.max_cells, params.max_references);
+    for (items, bounds) in &groups {
+        let count = items.as_ref().map_or(object_count, Vec::len);
+        let part = build_part(
+            prims,
+            items.as_deref(),
+            bounds,
+            count,
+            params,
+            cells_left,
+            refs_left,
+        )?;
+        cells_left -= part.geometry.cell_count() as u64;
+        refs_left -= part.cells.reference_count() as u64;
+        parts.push(part);
+    }
+    let stats = grid_stats(&parts, prims.len(), object_count, params, start);
+    Ok(Built { parts, stats })
+}
+
+/// One part's grid: over the primitives `items` (all when `None`) inside
+/// `bounds`, its resolution from their `count`, within the cell and
+/// reference budgets left.
+fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    prims: &P,
+    items: Option<&[u32]>,
+    bounds: &Aabb<T>,
+    count: usize,
+    params: &GridParams<T>,
+    max_cells: u64,
+    max_references: u64,
+) -> Result<GridPart<T>, BuildError> {
+    let res = resolution(bounds, count, params.density, max_cells)?;
+    let geometry = GridGeometry::new(*bounds, res);
     let visitor = PrimitiveCells {
         geometry: &geometry,
         prims,
         bounds: None,
         region: params.region.as_ref(),
     };
-    check_reference_estimate(&visitor, prims.len(), params.max_references)?;
-    let cells = CellLists::build(
-        geometry.cell_count(),
-        prims.len() as u32,
-        params.max_references,
-        &visitor,
-    )?;
+    let n = items.map_or(prims.len(), <[u32]>::len);
+    check_reference_estimate(&visitor, items, n, max_references)?;
+    let cells = match items {
+        Some(items) => {
+            CellLists::build_items(geometry.cell_count(), items, max_references, &visitor)?
+        }
+        None => CellLists::build(
+            geometry.cell_count(),
+            prims.len() as u32,
+            max_references,
+            &visitor,
+        )?,
+    };
     let cells = if geometry.cell_count() >= OCCUPIED_BITS_MIN_CELLS {
         cells.with_occupied_bits()
     } else {
@@ -287,23 +358,52 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             .windows(2)
             .map(|w| (w[0] as usize, (w[1] - w[0]) as usize)),
     );
-    let bytes = cells.bytes()
-        + blocks.as_ref().map_or(0, Blocks::bytes)
-        + packed.as_ref().map_or(0, PackedTriangles::memory_bytes)
-        + (0..3)
-            .map(|a| size_of_val(geometry.boundaries(a)))
-            .sum::<usize>();
-    let (empty_cells, max_cell_len) = cells.occupancy();
-    let stats = AccelStats {
+    Ok(GridPart {
+        geometry,
+        cells,
+        blocks,
+        packed,
+    })
+}
+
+/// The statistics of a grid of `parts` over `primitives`, of which
+/// `object_count` are gridded (fewer with a region).
+fn grid_stats<T: Real>(
+    parts: &[GridPart<T>],
+    primitives: usize,
+    object_count: usize,
+    params: &GridParams<T>,
+    start: Instant,
+) -> AccelStats {
+    let bytes = parts
+        .iter()
+        .map(|p| {
+            p.cells.bytes()
+                + p.blocks.as_ref().map_or(0, Blocks::bytes)
+                + p.packed.as_ref().map_or(0, PackedTriangles::memory_bytes)
+                + (0..3)
+                    .map(|a| size_of_val(p.geometry.boundaries(a)))
+                    .sum::<usize>()
+        })
+        .sum();
+    let cell_count: usize = parts.iter().map(|p| p.geometry.cell_count()).sum();
+    let (mut empty_cells, mut max_cell_len) = (0, 0);
+    for p in parts {
+        let (empty, max) = p.cells.occupancy();
+        empty_cells += empty;
+        max_cell_len = max_cell_len.max(max);
+    }
+    let res = parts[0].geometry.resolution();
+    AccelStats {
         kind: "grid",
-        primitives: prims.len(),
+        primitives,
         // Everything the build does, its statistics included.
         build_time: start.elapsed(),
         bytes,
-        nodes: geometry.cell_count(),
-        leaves: geometry.cell_count(),
+        nodes: cell_count,
+        leaves: cell_count,
         empty_leaves: empty_cells,
-        references: cells.reference_count(),
+        references: parts.iter().map(|p| p.cells.reference_count()).sum(),
         max_leaf_references: max_cell_len,
         extra: vec![
             ("nx", f64::from(res[0])),
@@ -312,15 +412,9 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             ("density", params.density),
             (
                 "cells_per_object",
-                geometry.cell_count() as f64 / object_count.max(1) as f64,
+                cell_count as f64 / object_count.max(1) as f64,
             ),
+            ("parts", parts.len() as f64),
         ],
-    };
-    Ok(Built {
-        geometry,
-        cells,
-        blocks,
-        packed,
-        stats,
-    })
+    }
 }

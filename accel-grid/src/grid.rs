@@ -9,10 +9,27 @@ use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
 
 /// A uniform grid over a primitive set (see the crate docs).
 ///
-/// It borrows the primitives and stores only `u32` indices into them.
+/// It borrows the primitives and stores only `u32` indices into them. A
+/// scene with a small dense part in a large sparse space, or a floor of many
+/// flat primitives, is gridded in parts ([`GridParams::parts`]): a uniform
+/// grid per part, walked one after the other.
 #[derive(Debug)]
 pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     pub(crate) prims: &'a P,
+    /// The first part: the whole grid of a scene in one part (nearly every
+    /// scene), kept inline so its queries load nothing more.
+    pub(crate) first: GridPart<T>,
+    /// The other parts, if any.
+    pub(crate) rest: Vec<GridPart<T>>,
+    pub(crate) stats: AccelStats,
+    /// True when the grid covers nothing (no primitive was placed).
+    pub(crate) empty: bool,
+}
+
+/// One uniform grid of a [`Grid`]: its geometry, its cell lists, and what
+/// its walks use to go faster.
+#[derive(Debug)]
+pub struct GridPart<T: Real> {
     pub(crate) geometry: GridGeometry<T>,
     pub(crate) cells: CellLists,
     /// Blocks of cells for skipping empty space ([`crate::blocks`]), on
@@ -21,9 +38,27 @@ pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
     /// The cells' triangles in packed blocks, when the layout asks for
     /// them and the primitives are watertight triangles.
     pub(crate) packed: Option<PackedTriangles<T>>,
-    pub(crate) stats: AccelStats,
-    /// True when the grid covers nothing (no primitive was placed).
-    pub(crate) empty: bool,
+}
+
+impl<T: Real> GridPart<T> {
+    /// The part's geometry (bounds, resolution, boundaries).
+    #[must_use]
+    pub fn geometry(&self) -> &GridGeometry<T> {
+        &self.geometry
+    }
+
+    /// The part's cell lists (global primitive indices).
+    #[must_use]
+    pub fn cells(&self) -> &CellLists {
+        &self.cells
+    }
+
+    /// The blocks its walks skip empty space with, if it keeps them
+    /// ([`GridParams::skip_empty_blocks`]).
+    #[must_use]
+    pub fn blocks(&self) -> Option<&Blocks<T>> {
+        self.blocks.as_ref()
+    }
 }
 
 impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
@@ -42,13 +77,14 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     /// or an exceeded cell or reference budget.
     pub fn with_params(prims: &'a P, params: &GridParams<T>) -> Result<Self, BuildError> {
         let built = build(prims, params)?;
+        let mut parts = built.parts.into_iter();
+        let first = parts.next().expect("a build makes at least one part");
+        let rest: Vec<GridPart<T>> = parts.collect();
         let grid = Self {
             prims,
-            empty: built.cells.reference_count() == 0,
-            geometry: built.geometry,
-            cells: built.cells,
-            blocks: built.blocks,
-            packed: built.packed,
+            empty: first.cells.reference_count() == 0 && rest.is_empty(),
+            first,
+            rest,
             stats: built.stats,
         };
         #[cfg(debug_assertions)]
@@ -58,23 +94,31 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
         Ok(grid)
     }
 
-    /// The grid's geometry (bounds, resolution, boundaries).
+    /// The first part's geometry (bounds, resolution, boundaries): the
+    /// whole grid's, unless it is in parts ([`Grid::parts`]).
     #[must_use]
     pub fn geometry(&self) -> &GridGeometry<T> {
-        &self.geometry
+        &self.first.geometry
     }
 
-    /// The cell lists.
+    /// The first part's cell lists.
     #[must_use]
     pub fn cells(&self) -> &CellLists {
-        &self.cells
+        &self.first.cells
     }
 
-    /// The blocks its walks skip empty space with, if it keeps them
+    /// The first part's empty-space blocks, if it keeps them
     /// ([`GridParams::skip_empty_blocks`]).
     #[must_use]
     pub fn blocks(&self) -> Option<&Blocks<T>> {
-        self.blocks.as_ref()
+        self.first.blocks.as_ref()
+    }
+
+    /// Every part, in the order queries walk them: one for most scenes; a
+    /// small dense part, then the large primitives around it; or the rest,
+    /// then a floor ([`GridParams::parts`]).
+    pub fn parts(&self) -> impl Iterator<Item = &GridPart<T>> {
+        core::iter::once(&self.first).chain(&self.rest)
     }
 
     /// The indexed primitives.
@@ -90,6 +134,23 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     /// # Errors
     /// A message naming the first broken invariant.
     pub fn validate(&self) -> Result<(), String> {
+        let mut seen = vec![false; self.prims.len()];
+        for (k, part) in self.parts().enumerate() {
+            part.validate(self.prims, &mut seen)
+                .map_err(|e| format!("part {k}: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
+impl<T: Real> GridPart<T> {
+    /// [`Grid::validate`] for one part; `seen` marks the primitives
+    /// referenced so far, which no other part may reference.
+    fn validate<P: PrimitiveSet<T> + ?Sized>(
+        &self,
+        prims: &P,
+        seen: &mut [bool],
+    ) -> Result<(), String> {
         let offsets = self.cells.offsets();
         if offsets.len() != self.geometry.cell_count() + 1 {
             return Err(format!(
@@ -108,7 +169,8 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
         if let Some(blocks) = &self.blocks {
             blocks.check(&self.geometry, &self.cells)?;
         }
-        let n = self.prims.len();
+        let n = prims.len();
+        let mut mine = Vec::new();
         for c in 0..self.geometry.cell_count() {
             let refs = self.cells.cell(c);
             if let Some(w) = refs.windows(2).find(|w| w[0] >= w[1]) {
@@ -123,10 +185,19 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
                         "cell {c}: reference {p} out of range ({n} primitives)"
                     ));
                 }
-                if !self.prims.bounds(p as usize).overlaps(&cell_box) {
+                if !prims.bounds(p as usize).overlaps(&cell_box) {
                     return Err(format!("cell {c}: primitive {p} lies outside the cell"));
                 }
+                mine.push(p);
             }
+        }
+        mine.sort_unstable();
+        mine.dedup();
+        if let Some(&p) = mine.iter().find(|&&p| seen[p as usize]) {
+            return Err(format!("primitive {p} is in two parts"));
+        }
+        for p in mine {
+            seen[p as usize] = true;
         }
         Ok(())
     }

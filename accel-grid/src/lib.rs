@@ -30,6 +30,20 @@
 //! for isosurface rendering"). The answers are the same; the terrain's camera
 //! rays open 6 cells each instead of 41.
 //!
+//! **Parts.** One grid over a small dense object in a large sparse scene
+//! (a teapot in a stadium) makes cells as wide as the stadium asks, and the
+//! teapot falls into one or a few of them; a floor of many triangles makes
+//! every ray leaving it walk the floor's cells. So, as the octree and the
+//! kD-tree do ([`accel_core::parts`]), such a scene is gridded in parts:
+//! the dense primitives and the large ones, or the rest and the floor,
+//! each get a uniform grid of their own, and a query walks them one after
+//! the other with the best hit so far (a floor's flat box first tested with
+//! the thin beam of [`accel_core::TraversalRay::with_wide_hits`], which a
+//! ray leaving the floor misses). Whether a scene splits is read from the
+//! same pass that unites the primitives' bounds
+//! ([`accel_core::bounds_survey`]), so dense scenes pay nothing for it.
+//! [`GridParams::parts`] `= false` gives the seed's single grid.
+//!
 //! The cell logic ([`cells`], [`dda`], [`csr`], [`resolution`]) is public: the
 //! octree of nested grids is built from it.
 //!
@@ -59,7 +73,7 @@ pub mod resolution;
 mod traverse;
 
 pub use build::{DEFAULT_LAYOUT, GridParams};
-pub use grid::Grid;
+pub use grid::{Grid, GridPart};
 
 /// The README's library example, compiled and run as a doc test.
 #[cfg(doctest)]

@@ -1,14 +1,15 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
 use crate::dda::{BeamWalk, Step};
-use crate::grid::Grid;
+use crate::grid::{Grid, GridPart};
 use accel_core::packed::for_each_candidate;
+use accel_core::parts::part_beam;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
     TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+impl<T: Real> GridPart<T> {
     /// The references of cell `c`, by its occupancy bit first if `BITS`
     /// (a large grid's, see [`crate::build::OCCUPIED_BITS_MIN_CELLS`]),
     /// with where they start in the reference array.
@@ -60,50 +61,59 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         walk.step(limit)
     }
 
-    /// [`Grid::nearest_with`], reading occupancy bits and skipping empty
-    /// blocks where the grid keeps them.
-    fn nearest<C: CostCounter>(
+    /// [`GridPart::nearest_with`], reading occupancy bits and skipping
+    /// empty blocks where the part keeps them.
+    #[inline]
+    fn nearest<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
         &self,
-        ray: &Ray<T>,
+        prims: &P,
+        tr: &TraversalRay<T>,
+        best: Option<Hit<T>>,
         counter: &mut C,
-    ) -> Result<Option<Hit<T>>, QueryError> {
+    ) -> Option<Hit<T>> {
         match (self.cells.has_occupied_bits(), self.blocks.is_some()) {
-            (true, true) => self.nearest_with::<true, true, C>(ray, counter),
-            (true, false) => self.nearest_with::<true, false, C>(ray, counter),
-            (false, true) => self.nearest_with::<false, true, C>(ray, counter),
-            (false, false) => self.nearest_with::<false, false, C>(ray, counter),
+            (true, true) => self.nearest_with::<true, true, P, C>(prims, tr, best, counter),
+            (true, false) => self.nearest_with::<true, false, P, C>(prims, tr, best, counter),
+            (false, true) => self.nearest_with::<false, true, P, C>(prims, tr, best, counter),
+            (false, false) => self.nearest_with::<false, false, P, C>(prims, tr, best, counter),
         }
     }
 
-    /// [`Grid::any_with`], reading occupancy bits and skipping empty blocks
-    /// where the grid keeps them.
-    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+    /// [`GridPart::any_with`], reading occupancy bits and skipping empty
+    /// blocks where the part keeps them.
+    #[inline]
+    fn any<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
+        &self,
+        prims: &P,
+        tr: &TraversalRay<T>,
+        counter: &mut C,
+    ) -> bool {
         match (self.cells.has_occupied_bits(), self.blocks.is_some()) {
-            (true, true) => self.any_with::<true, true, C>(ray, counter),
-            (true, false) => self.any_with::<true, false, C>(ray, counter),
-            (false, true) => self.any_with::<false, true, C>(ray, counter),
-            (false, false) => self.any_with::<false, false, C>(ray, counter),
+            (true, true) => self.any_with::<true, true, P, C>(prims, tr, counter),
+            (true, false) => self.any_with::<true, false, P, C>(prims, tr, counter),
+            (false, true) => self.any_with::<false, true, P, C>(prims, tr, counter),
+            (false, false) => self.any_with::<false, false, P, C>(prims, tr, counter),
         }
     }
 
-    /// The nearest hit: walk front to back, and stop once the beam's front has
-    /// passed the best hit by the hit tolerance (a hit found in one cell may
-    /// lie beyond it; the seed's termination trap).
-    fn nearest_with<const BITS: bool, const BLOCKS: bool, C: CostCounter>(
+    /// The nearest of `best` and the part's hits: walk front to back, and
+    /// stop once the beam's front has passed the best hit by the hit
+    /// tolerance (a hit found in one cell may lie beyond it; the seed's
+    /// termination trap).
+    fn nearest_with<const BITS: bool, const BLOCKS: bool, P, C>(
         &self,
-        ray: &Ray<T>,
+        prims: &P,
+        tr: &TraversalRay<T>,
+        mut best: Option<Hit<T>>,
         counter: &mut C,
-    ) -> Result<Option<Hit<T>>, QueryError> {
-        ray.validate()?;
-        if self.empty {
-            return Ok(None);
-        }
-        let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
-            return Ok(None);
-        };
+    ) -> Option<Hit<T>>
+    where
+        P: PrimitiveSet<T> + ?Sized,
+        C: CostCounter,
+    {
+        let ray = tr.ray();
         let mut mailbox = Mailbox::new();
-        let mut best: Option<Hit<T>> = None;
-        let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
+        let (mut walk, first) = BeamWalk::start(&self.geometry, tr, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
             let mut empty = true;
@@ -116,7 +126,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                     if !mailbox.seen(p) {
                         counter.prim();
                         let t_max = best.map_or(ray.t_max, |b| b.t);
-                        if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
+                        if let Some(h) = prims.intersect(p as usize, &tr.prepared, t_max) {
                             best = nearer(best, Hit::new(p, h));
                         }
                     }
@@ -127,28 +137,28 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                 Some(b) => tr.t_end.min(b.t + tr.t_tol),
                 None => tr.t_end,
             };
-            cells = self.next_step::<BLOCKS>(&mut walk, &tr, limit, empty);
+            cells = self.next_step::<BLOCKS>(&mut walk, tr, limit, empty);
             if cells == Step::End {
-                return Ok(best);
+                return best;
             }
         }
     }
 
-    /// Any hit: the same walk, returning at the first hit in `[t_min, t_max]`.
-    fn any_with<const BITS: bool, const BLOCKS: bool, C: CostCounter>(
+    /// Any hit in the part: the same walk, returning at the first hit in
+    /// `[t_min, t_max]`.
+    fn any_with<const BITS: bool, const BLOCKS: bool, P, C>(
         &self,
-        ray: &Ray<T>,
+        prims: &P,
+        tr: &TraversalRay<T>,
         counter: &mut C,
-    ) -> Result<bool, QueryError> {
-        ray.validate()?;
-        if self.empty {
-            return Ok(false);
-        }
-        let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
-            return Ok(false);
-        };
+    ) -> bool
+    where
+        P: PrimitiveSet<T> + ?Sized,
+        C: CostCounter,
+    {
+        let ray = tr.ray();
         let mut mailbox = Mailbox::new();
-        let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
+        let (mut walk, first) = BeamWalk::start(&self.geometry, tr, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
             let mut found = false;
@@ -166,19 +176,67 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                         return false;
                     }
                     counter.prim();
-                    self.prims
+                    prims
                         .intersect(p as usize, &tr.prepared, ray.t_max)
                         .is_some()
                 });
             });
             if found {
-                return Ok(true);
+                return true;
             }
-            cells = self.next_step::<BLOCKS>(&mut walk, &tr, tr.t_end, empty);
+            cells = self.next_step::<BLOCKS>(&mut walk, tr, tr.t_end, empty);
             if cells == Step::End {
-                return Ok(false);
+                return false;
             }
         }
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+    /// The nearest hit, part by part (the later parts with the best hit of
+    /// the earlier); a grid of one part, nearly every grid, without the
+    /// loop.
+    fn nearest<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(None);
+        }
+        if self.rest.is_empty() {
+            let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
+                return Ok(None);
+            };
+            return Ok(self.first.nearest(self.prims, &tr, None, counter));
+        }
+        let wide = self.prims.wide_hits();
+        Ok(self.parts().fold(None, |best, part| {
+            match part_beam(ray, part.geometry.bounds(), wide) {
+                Some(tr) => part.nearest(self.prims, &tr, best, counter),
+                None => best,
+            }
+        }))
+    }
+
+    /// Whether anything is hit, part by part.
+    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+        ray.validate()?;
+        if self.empty {
+            return Ok(false);
+        }
+        if self.rest.is_empty() {
+            let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
+                return Ok(false);
+            };
+            return Ok(self.first.any(self.prims, &tr, counter));
+        }
+        let wide = self.prims.wide_hits();
+        Ok(self.parts().any(|part| {
+            part_beam(ray, part.geometry.bounds(), wide)
+                .is_some_and(|tr| part.any(self.prims, &tr, counter))
+        }))
     }
 }
 
@@ -187,7 +245,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
         if self.empty {
             Aabb::empty()
         } else {
-            *self.geometry.bounds()
+            self.parts()
+                .fold(Aabb::empty(), |b, p| b.union(p.geometry.bounds()))
         }
     }
 
@@ -223,14 +282,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
         if region.is_empty() || self.empty {
             return Ok(Vec::new());
         }
-        let grown = region_search_box(region, self.geometry.bounds());
-        let Some(cells) = self.geometry.cells_overlapping(&grown) else {
-            return Ok(Vec::new());
-        };
         let mut found: Vec<u32> = Vec::new();
-        self.geometry.for_each_cell_index(&cells, |c| {
-            found.extend_from_slice(self.cells.cell(c));
-        });
+        for part in self.parts() {
+            let grown = region_search_box(region, part.geometry.bounds());
+            let Some(cells) = part.geometry.cells_overlapping(&grown) else {
+                continue;
+            };
+            part.geometry.for_each_cell_index(&cells, |c| {
+                found.extend_from_slice(part.cells.cell(c));
+            });
+        }
         Ok(region_matches(self.prims, region, found))
     }
 

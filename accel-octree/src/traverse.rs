@@ -308,22 +308,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     }
 
     /// The beam of `ray` through the part whose root is `root`, `None` when
-    /// nothing there can be hit. A flat part's box (a floor built as a part
-    /// of its own, [`crate::OctreeParams::flat_part`]) is tested first with
-    /// the wide type's thin beam ([`TraversalRay::with_wide_hits`]) where
-    /// the primitives' hits are wide ([`PrimitiveSet::wide_hits`]): a ray
-    /// leaving the floor misses it there, where the walk's own beam, as
-    /// wide as `T`'s rounding of the cell crossings, would still graze it.
-    /// Other parts skip that test: on the teapot in a stadium it cost 7–12%
-    /// of the throughput and spared nothing.
+    /// nothing there can be hit ([`accel_core::parts::part_beam`]: a flat
+    /// part is first tested with the wide type's thin beam).
     #[inline]
     fn part_beam(&self, ray: &Ray<T>, root: &Node<T>) -> Option<TraversalRay<T>> {
-        let bounds = root.geometry.bounds();
-        let flat = (0..3).any(|a| bounds.min[a] == bounds.max[a]);
-        if flat && self.prims.wide_hits() && TraversalRay::with_wide_hits(ray, bounds).is_none() {
-            return None;
-        }
-        TraversalRay::new(ray, bounds)
+        accel_core::parts::part_beam(ray, root.geometry.bounds(), self.prims.wide_hits())
     }
 
     /// Appends the references of every leaf overlapping `region`.

@@ -115,9 +115,14 @@ pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     let kind = config.kind();
     let wrap = |cause| AccelError::Build { kind, cause };
     Ok(match config {
-        AccelConfig::Grid { density, layout } => {
+        AccelConfig::Grid {
+            density,
+            layout,
+            parts,
+        } => {
             let params = GridParams {
                 layout: *layout,
+                parts: *parts,
                 ..GridParams::with_density(*density)
             };
             Box::new(Grid::with_params(prims, &params).map_err(wrap)?)
@@ -146,6 +151,9 @@ pub enum AccelConfig {
         density: f64,
         /// Whether cells' triangles are also packed ([`Layout`]).
         layout: Layout,
+        /// Whether a small dense part or a floor gets a grid of its own
+        /// ([`GridParams::parts`]).
+        parts: bool,
     },
     /// An octree of nested grids.
     Octree(OctreeParams),
@@ -162,6 +170,7 @@ impl AccelConfig {
         Self::Grid {
             density,
             layout: GRID_LAYOUT,
+            parts: true,
         }
     }
 
@@ -192,8 +201,16 @@ impl AccelConfig {
     #[must_use]
     pub fn label(&self) -> String {
         match self {
-            Self::Grid { density, layout } => {
-                format!("grid m={density}{}", layout_label(*layout, GRID_LAYOUT))
+            Self::Grid {
+                density,
+                layout,
+                parts,
+            } => {
+                let whole = if *parts { "" } else { " one-part" };
+                format!(
+                    "grid m={density}{whole}{}",
+                    layout_label(*layout, GRID_LAYOUT)
+                )
             }
             Self::Octree(p) => {
                 let shape = match octree_preset_name(p) {

@@ -15,8 +15,9 @@
 //! 2. The uniform grid of density [`GRID_DENSITY`] is built (`O(n)`, the
 //!    cheapest build). Its statistics decide whether a grid can serve the
 //!    scene at all: if its fullest cell holds more than [`GRID_CELL_LIMIT`]
-//!    references (a small dense object in a large empty space, "teapot in a
-//!    stadium"), every ray through that cell tests them all, and the grid is
+//!    references (a small dense object in a large space the grid does not
+//!    set apart as a part of its own: a sphere in a box of finely tiled
+//!    walls), every ray through that cell tests them all, and the grid is
 //!    skipped without a probe; the octree's two-level preset, which refines
 //!    exactly such cells, takes its place as the first structure.
 //! 3. The first structure makes and times the probe: representative rays
@@ -920,7 +921,7 @@ pub fn view_probe<T: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use accel_core::scenes::{random_rays, random_soup, teapot_in_stadium, uv_sphere};
+    use accel_core::scenes::{random_rays, random_soup, sphere_in_tiled_box, uv_sphere};
     use accel_core::{BruteForce, TriangleMesh, Vec3};
 
     /// Brute force that takes at least a millisecond per ray and counts them.
@@ -1131,11 +1132,13 @@ mod tests {
     }
 
     #[test]
-    fn a_teapot_in_a_stadium_skips_the_grid_without_probing_it() {
-        // 20k triangles in a sphere of radius 1, in a box of side 10^4: the
-        // coarse grid's cells are hundreds of units wide, so the sphere's
-        // cell (or cells) hold thousands of references.
-        let mesh = teapot_in_stadium(20_000, 1.0e4);
+    fn a_dense_cell_skips_the_grid_without_probing_it() {
+        // 20k triangles in a sphere of radius 1, in a box of side 10^4 whose
+        // faces are tiled 20 × 20 (no triangle large enough for the grid to
+        // set the sphere apart, `accel_core::parts`): the coarse grid's
+        // cells are hundreds of units wide, so the sphere's cell (or cells)
+        // hold thousands of references.
+        let mesh = sphere_in_tiled_box(20_000, 1.0e4, 20);
         let mut first = "";
         let rays = random_rays(&Aabb::new(Vec3::splat(-2.0), Vec3::splat(2.0)), 512, 5);
         let probe: Vec<ProbeRay<f64>> = rays

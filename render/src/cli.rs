@@ -277,6 +277,10 @@ pub struct DialArgs {
     /// Grid density m (about m³ cells per object; default 2). Needs --accel grid.
     #[arg(long, value_name = "M", value_parser = density_parser, allow_negative_numbers = true)]
     pub grid_density: Option<f64>,
+    /// One grid over the whole scene (the seed's), even where a small dense
+    /// part or a floor would get a grid of its own. Needs --accel grid.
+    #[arg(long)]
+    pub grid_no_parts: bool,
     /// Octree preset. Needs --accel octree.
     #[arg(long, value_name = "PRESET", value_parser = PossibleValuesParser::new(OCTREE_PRESETS))]
     pub octree_preset: Option<String>,
@@ -343,6 +347,7 @@ impl DialArgs {
             "--grid-density",
             AccelKind::Grid,
         );
+        add(self.grid_no_parts, "--grid-no-parts", AccelKind::Grid);
         add(
             self.octree_preset.is_some(),
             "--octree-preset",
@@ -434,6 +439,7 @@ impl DialArgs {
             AccelKind::Grid => AccelConfig::Grid {
                 density: self.grid_density.unwrap_or(2.0),
                 layout: self.layout.map_or(GRID_LAYOUT, LayoutChoice::layout),
+                parts: !self.grid_no_parts,
             },
             AccelKind::Octree => {
                 let mut p = self

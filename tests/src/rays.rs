@@ -22,7 +22,7 @@ pub const PROBE_DENSITIES: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 pub struct RayContext<T> {
     /// Vertices, edges, surfaces and the frame.
     pub landmarks: Landmarks<T>,
-    /// The probe grids' geometries, from [`Grid::geometry`]: one per
+    /// The probe grids' geometries, from [`Grid::parts`]: every part's, per
     /// density of [`PROBE_DENSITIES`], then the enclosing-region grid.
     pub grids: Vec<GridGeometry<T>>,
 }
@@ -39,7 +39,7 @@ impl<T: Real> RayContext<T> {
         let grids = params
             .iter()
             .filter_map(|p| Grid::with_params(prims, p).ok())
-            .map(|g| g.geometry().clone())
+            .flat_map(|g| g.parts().map(|p| p.geometry().clone()).collect::<Vec<_>>())
             .collect();
         Self { landmarks, grids }
     }

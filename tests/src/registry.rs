@@ -44,6 +44,13 @@ pub fn accelerators<T: Real, P: PrimitiveSet<T> + ?Sized + 'static>() -> Vec<Ent
         entry("grid m=1", |p| boxed(Grid::with_params(p, &density(1.0)))),
         entry("grid m=2", |p| boxed(Grid::with_params(p, &density(2.0)))),
         entry("grid m=4", |p| boxed(Grid::with_params(p, &density(4.0)))),
+        entry("grid m=2 one-part", |p| {
+            let params = GridParams {
+                parts: false,
+                ..density(2.0)
+            };
+            boxed(Grid::with_params(p, &params))
+        }),
         entry("grid m=1 packed", |p| {
             boxed(Grid::with_params(
                 p,

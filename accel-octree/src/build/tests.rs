@@ -233,7 +233,12 @@ fn presets_shape_the_tree_as_documented() {
     assert_eq!(two.root_geometry(), default.root_geometry());
 
     let grid_root = Octree::with_params(&mesh, &one_root(OctreeParams::grid_root())).unwrap();
-    let grid = Grid::new(&mesh).unwrap();
+    // The seed's single grid (not in parts), as the octree's one root.
+    let single = accel_grid::GridParams {
+        parts: false,
+        ..Default::default()
+    };
+    let grid = Grid::with_params(&mesh, &single).unwrap();
     assert_eq!(grid_root.root_geometry(), grid.geometry());
     assert!(grid_root.grid_count() > 1);
 }
@@ -244,9 +249,10 @@ fn the_stadium_costs_far_fewer_tests_than_in_a_grid() {
     let octree = Octree::new(&mesh).unwrap();
     // Indexed (the default), so that the counters count every reference a
     // cell makes the walk test (a packed grid counts only those its block
-    // test keeps).
+    // test keeps); one grid, the seed's, not one per part.
     let indexed = accel_grid::GridParams {
         layout: accel_core::packed::Layout::Indexed,
+        parts: false,
         ..Default::default()
     };
     let grid = Grid::with_params(&mesh, &indexed).unwrap();

@@ -111,6 +111,7 @@ pub fn all_settings() -> Vec<Setting> {
     let packed_grid = AccelConfig::Grid {
         density: 2.0,
         layout: Layout::Packed,
+        parts: true,
     };
     let packed_kd = AccelConfig::KdTree(KdTreeParams {
         layout: Layout::Packed,
