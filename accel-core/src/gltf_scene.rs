@@ -694,6 +694,30 @@ pub fn shared_scene_files() -> Vec<PathBuf> {
     files
 }
 
+/// The shared scene files for a test that needs them: `None` (the test
+/// skips, saying so) when `$ACCEL_SCENES` is not set and `../shared/scenes`
+/// is absent.
+///
+/// # Panics
+/// When `$ACCEL_SCENES` is set (CI sets it where the folder exists) but
+/// names no folder holding `.glb`/`.gltf` files: a run that asked for the
+/// shared scenes must not pass without testing them.
+#[must_use]
+pub fn shared_scene_files_for_test() -> Option<Vec<PathBuf>> {
+    let files = shared_scene_files();
+    match std::env::var_os("ACCEL_SCENES") {
+        Some(dir) if files.is_empty() => panic!(
+            "ACCEL_SCENES={} holds no .glb or .gltf files: the shared-scene tests cannot run",
+            Path::new(&dir).display()
+        ),
+        _ if files.is_empty() => {
+            eprintln!("skipped: no shared scenes (../shared/scenes absent, $ACCEL_SCENES not set)");
+            None
+        }
+        _ => Some(files),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -749,11 +773,14 @@ mod tests {
 
     #[test]
     fn khronos_box_loads_with_its_node_matrix() {
-        let Some(dir) = shared_scenes_dir() else {
-            eprintln!("skipped: shared scenes absent");
+        let Some(files) = shared_scene_files_for_test() else {
             return;
         };
-        let scene = load(&dir.join("khronos_box_textured.glb")).unwrap();
+        let file = files
+            .iter()
+            .find(|p| p.ends_with("khronos_box_textured.glb"))
+            .expect("the shared scenes hold khronos_box_textured.glb");
+        let scene = load(file).unwrap();
         assert_eq!(scene.mesh.triangle_count(), 12);
         // The README's bounds: the unit cube centred at the origin.
         let b = scene.mesh.bounds();

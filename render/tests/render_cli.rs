@@ -3,7 +3,7 @@
 
 mod common;
 
-use accel_core::gltf_scene::shared_scene_files;
+use accel_core::gltf_scene::shared_scene_files_for_test;
 use common::{Gltf, SQUARE, SQUARE_INDICES, line, run, stdout};
 use render::accel::AccelKind;
 
@@ -188,14 +188,13 @@ fn gltf_files_use_their_camera_or_are_framed() {
 
 #[test]
 fn shared_scenes_render_with_their_counts_and_bounds() {
-    let files = shared_scene_files();
-    let Some(boxed) = files
-        .iter()
-        .find(|p| p.ends_with("khronos_box_textured.glb"))
-    else {
-        eprintln!("skipped: shared scenes absent");
+    let Some(files) = shared_scene_files_for_test() else {
         return;
     };
+    let boxed = files
+        .iter()
+        .find(|p| p.ends_with("khronos_box_textured.glb"))
+        .expect("the shared scenes hold khronos_box_textured.glb");
     let dir = tempfile::tempdir().unwrap();
     // uint16 indices and a node matrix (a rotation) in the original Khronos file.
     let o = run(

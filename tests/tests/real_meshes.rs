@@ -1,11 +1,11 @@
 //! The same assertions on real meshes: the glTF files of `../shared/scenes`
-//! (or `$ACCEL_SCENES`), skipped with a note when the folder is absent. Per
+//! (or `$ACCEL_SCENES`), skipped with a note when the folder is absent and `$ACCEL_SCENES` unset, an error when it is set and empty. Per
 //! file and precision: a few thousand rays of every kind (camera, random,
 //! aimed at vertices, edges, cell faces, edges and corners, starting on the
 //! surface, narrow windows), region boxes, and, for closed meshes, rays aimed
 //! at shared edges and vertices, which must not leak.
 
-use accel_core::gltf_scene::{load, shared_scene_files};
+use accel_core::gltf_scene::{load, shared_scene_files_for_test};
 use accel_core::scenes::{Camera, random_rays};
 use accel_core::{BruteForce, Ray, Real, TriangleMesh};
 use accel_tests::Landmarks;
@@ -85,11 +85,9 @@ fn check_mesh<T: Real>(name: &str, mesh: &TriangleMesh<T>) -> Result<String, Str
 }
 
 fn check_all_files<T: Real>() {
-    let files = shared_scene_files();
-    if files.is_empty() {
-        eprintln!("skipped: no shared scenes (../shared/scenes or $ACCEL_SCENES is absent)");
+    let Some(files) = shared_scene_files_for_test() else {
         return;
-    }
+    };
     for path in files {
         let name = path
             .file_name()
