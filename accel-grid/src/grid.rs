@@ -6,13 +6,21 @@ use crate::cells::GridGeometry;
 use crate::csr::CellLists;
 use accel_core::packed::PackedTriangles;
 use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
+use core::borrow::Borrow;
+use core::marker::PhantomData;
+use std::sync::Arc;
 
 /// A uniform grid over a primitive set (see the crate docs).
 ///
-/// It borrows the primitives and stores only `u32` indices into them.
+/// It stores only `u32` indices into the primitives, which it holds as `S`:
+/// borrowed (`&'a P`, the default: [`Grid::new`], [`Grid::with_params`]) or
+/// shared ([`Arc<P>`]: [`Grid::shared`], [`Grid::shared_with_params`], a
+/// [`SharedGrid`]), which lets an application keep the grid beside its
+/// primitives in one struct (accel-core's crate docs, "Embedding").
 #[derive(Debug)]
-pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
-    pub(crate) prims: &'a P,
+pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized, S = &'a P> {
+    pub(crate) prims: S,
+    pub(crate) borrows: PhantomData<&'a P>,
     pub(crate) geometry: GridGeometry<T>,
     pub(crate) cells: CellLists,
     /// Blocks of cells for skipping empty space ([`crate::blocks`]), on
@@ -41,9 +49,40 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     /// [`BuildError`] for non-finite primitives, an invalid density or region,
     /// or an exceeded cell or reference budget.
     pub fn with_params(prims: &'a P, params: &GridParams<T>) -> Result<Self, BuildError> {
-        let built = build(prims, params)?;
+        Self::over(prims, params)
+    }
+}
+
+/// A [`Grid`] that shares its primitives through an [`Arc`].
+pub type SharedGrid<T, P> = Grid<'static, T, P, Arc<P>>;
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'static, T, P, Arc<P>> {
+    /// [`Grid::new`] over primitives it shares: the grid keeps them alive
+    /// itself, so it can be kept beside them in one struct or returned from
+    /// the function that loaded them.
+    ///
+    /// # Errors
+    /// As [`Grid::new`].
+    pub fn shared(prims: Arc<P>) -> Result<Self, BuildError> {
+        Self::over(prims, &GridParams::default())
+    }
+
+    /// [`Grid::with_params`] over primitives it shares (see [`Grid::shared`]).
+    ///
+    /// # Errors
+    /// As [`Grid::with_params`].
+    pub fn shared_with_params(prims: Arc<P>, params: &GridParams<T>) -> Result<Self, BuildError> {
+        Self::over(prims, params)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
+    /// Builds a grid over the primitives `held` holds, and keeps them.
+    fn over(held: S, params: &GridParams<T>) -> Result<Self, BuildError> {
+        let built = build(held.borrow(), params)?;
         let grid = Self {
-            prims,
+            prims: held,
+            borrows: PhantomData,
             empty: built.cells.reference_count() == 0,
             geometry: built.geometry,
             cells: built.cells,
@@ -78,9 +117,10 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     }
 
     /// The indexed primitives.
+    #[inline]
     #[must_use]
-    pub fn primitives(&self) -> &'a P {
-        self.prims
+    pub fn primitives(&self) -> &P {
+        self.prims.borrow()
     }
 
     /// Checks the structure's invariants: offsets monotone and covering the
@@ -108,7 +148,8 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
         if let Some(blocks) = &self.blocks {
             blocks.check(&self.geometry, &self.cells)?;
         }
-        let n = self.prims.len();
+        let prims = self.primitives();
+        let n = prims.len();
         for c in 0..self.geometry.cell_count() {
             let refs = self.cells.cell(c);
             if let Some(w) = refs.windows(2).find(|w| w[0] >= w[1]) {
@@ -123,7 +164,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
                         "cell {c}: reference {p} out of range ({n} primitives)"
                     ));
                 }
-                if !self.prims.bounds(p as usize).overlaps(&cell_box) {
+                if !prims.bounds(p as usize).overlaps(&cell_box) {
                     return Err(format!("cell {c}: primitive {p} lies outside the cell"));
                 }
             }

@@ -7,8 +7,9 @@ use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
     TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
+use core::borrow::Borrow;
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
     /// The references of cell `c`, by its occupancy bit first if `BITS`
     /// (a large grid's, see [`crate::build::OCCUPIED_BITS_MIN_CELLS`]),
     /// with where they start in the reference array.
@@ -101,6 +102,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
             return Ok(None);
         };
+        let prims = self.primitives();
         let mut mailbox = Mailbox::new();
         let mut best: Option<Hit<T>> = None;
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
@@ -116,7 +118,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                     if !mailbox.seen(p) {
                         counter.prim();
                         let t_max = best.map_or(ray.t_max, |b| b.t);
-                        if let Some(h) = self.prims.intersect(p as usize, &tr.prepared, t_max) {
+                        if let Some(h) = prims.intersect(p as usize, &tr.prepared, t_max) {
                             best = nearer(best, Hit::new(p, h));
                         }
                     }
@@ -147,6 +149,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
         let Some(tr) = TraversalRay::new(ray, self.geometry.bounds()) else {
             return Ok(false);
         };
+        let prims = self.primitives();
         let mut mailbox = Mailbox::new();
         let (mut walk, first) = BeamWalk::start(&self.geometry, &tr, tr.t_start);
         let mut cells = Step::Cells(first);
@@ -166,7 +169,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
                         return false;
                     }
                     counter.prim();
-                    self.prims
+                    prims
                         .intersect(p as usize, &tr.prepared, ray.t_max)
                         .is_some()
                 });
@@ -182,7 +185,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
+    for Grid<'_, T, P, S>
+{
     fn bounds(&self) -> Aabb<T> {
         if self.empty {
             Aabb::empty()
@@ -231,7 +236,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
         self.geometry.for_each_cell_index(&cells, |c| {
             found.extend_from_slice(self.cells.cell(c));
         });
-        Ok(region_matches(self.prims, region, found))
+        Ok(region_matches(self.primitives(), region, found))
     }
 
     fn stats(&self) -> AccelStats {
