@@ -76,6 +76,19 @@ pub(crate) fn precision_hint<T: Real>() -> &'static str {
     }
 }
 
+/// A failed `--accel auto` choice as one error, with the remedy where a
+/// probe ray starts beyond `T`'s range (a camera framed from beyond the
+/// `f32` limit): [`precision_hint`], as the pixels' errors have it.
+fn choose_failed<T: Real>(e: choose::ChooseError) -> anyhow::Error {
+    match e {
+        // A query error has no source: its message is the whole story.
+        choose::ChooseError::Query(QueryError::OriginOutOfRange { .. }) => {
+            anyhow::anyhow!("choosing the accelerator: {e}{}", precision_hint::<T>())
+        }
+        e => anyhow::Error::new(e).context("choosing the accelerator"),
+    }
+}
+
 /// Loads the scene named by a SCENE argument, reporting how long it took.
 pub(crate) fn load_scene(arg: &str) -> Result<Scene> {
     let start = Instant::now();
@@ -212,7 +225,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                     offset,
                 )
             })
-            .context("choosing the accelerator")?;
+            .map_err(choose_failed::<T>)?;
             println!("auto: {} ({})", choice.config, choice.reason);
             choice.accel
         }
@@ -427,8 +440,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 })
             })
             .collect();
-        let choice =
-            choose::choose(prims, total, |_| Ok(probe)).context("choosing the accelerator")?;
+        let choice = choose::choose(prims, total, |_| Ok(probe)).map_err(choose_failed::<T>)?;
         println!("auto: {} ({})", choice.config, choice.reason);
         if !configs.contains(&choice.config) {
             configs.push(choice.config);

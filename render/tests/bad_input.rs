@@ -373,6 +373,41 @@ fn scenes_inside_the_f32_limit_render_or_name_the_remedy() {
     }
 }
 
+/// See: issue 32, item 1 (left over). A scene at 2e37 (inside the `f32`
+/// limit of about 2.1e37) is framed from a camera beyond it. Every named
+/// accelerator refuses the first pixel's ray with the remedy; `--accel auto`
+/// traces probe rays from that camera before any pixel (on an image large
+/// enough to be worth probing: 2 triangles × 256² pixels × 2 rays is past
+/// `choose::TINY_WORK`), and must name the remedy too. In `f64` it renders.
+#[test]
+fn a_camera_beyond_the_f32_limit_names_the_remedy_with_every_accelerator() {
+    let dir = tempfile::tempdir().unwrap();
+    Gltf {
+        positions: &square_at(2e37),
+        indices: Some(&SQUARE_INDICES),
+        mode: 4,
+        nodes: r#"[{"mesh":0}]"#,
+        extra: "",
+    }
+    .write(dir.path(), "far.gltf");
+    let size = [
+        "--width", "256", "--height", "256", "--ao", "0", "--spp", "1",
+    ];
+    for accel in ["grid", "octree", "kdtree", "brute", "auto"] {
+        let mut args = vec!["far.gltf", "--accel", accel, "--out", "out.png"];
+        args.extend(size);
+        let o = run(dir.path(), &args);
+        assert_refused(&o, &["ray origin is beyond", "f32", "--precision f64"]);
+        assert!(!dir.path().join("out.png").exists(), "{accel}");
+    }
+    let mut args = vec!["far.gltf", "--accel", "auto", "--out", "out.png"];
+    args.extend(size);
+    args.extend(["--precision", "f64"]);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "auto in f64: {}", common::stderr(&o));
+    assert!(common::stdout(&o).contains("auto: "), "premise: auto chose");
+}
+
 /// See: issue 32, item 4. A run killed while it traces (SIGKILL: no
 /// destructor runs, as after an unhandled Ctrl-C or SIGTERM) leaves no hidden
 /// `.out.png.XXXXXX.tmp` behind: the outputs were checked before the work
