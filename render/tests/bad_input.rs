@@ -373,6 +373,83 @@ fn scenes_inside_the_f32_limit_render_or_name_the_remedy() {
     }
 }
 
+/// See: issue 32, item 3 (left over). `render bench --width 8192 --height
+/// 8192` passes the 64-megapixel cap, but its generated rays need about
+/// 30 GiB in `f64` (480 bytes a pixel): the estimate is refused against
+/// `--memory-budget` before the scene is even loaded, as a render's is. A
+/// bench within the budget runs, and rays read from a file are not
+/// estimated by the image size (the file bounds them).
+#[test]
+fn benches_over_the_memory_budget_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needles) in [
+        (
+            &[
+                "bench",
+                "--width",
+                "8192",
+                "--height",
+                "8192",
+                "--precision",
+                "f64",
+            ][..],
+            &[
+                "8192",
+                "30.0 GiB",
+                "in f64",
+                "480 bytes a pixel",
+                "--memory-budget of 8 GiB",
+            ][..],
+        ),
+        (
+            &[
+                "bench",
+                "--width",
+                "4096",
+                "--height",
+                "4096",
+                "--memory-budget",
+                "4",
+            ],
+            &[
+                "4.7 GiB",
+                "in f32",
+                "300 bytes a pixel",
+                "--memory-budget of 4 GiB",
+            ],
+        ),
+    ] {
+        let o = run(dir.path(), args);
+        assert_refused(&o, needles);
+        assert!(common::stdout(&o).is_empty(), "{}", common::stdout(&o));
+        assert!(entries(dir.path()).is_empty());
+    }
+    let small = [
+        "bench",
+        "--accel",
+        "grid",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--min-time",
+        "0.001",
+    ];
+    let mut args = small.to_vec();
+    args.extend(["--memory-budget", "0.01", "--write-rays", "r.rays"]);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    // 32² × 300 bytes is 0.0003 GiB: over a budget of 0.0001 GiB.
+    let mut args = small.to_vec();
+    args.extend(["--memory-budget", "0.0001"]);
+    assert_refused(&run(dir.path(), &args), &["--memory-budget of 0.0001 GiB"]);
+    // With --rays the image size does not count.
+    let mut args = small.to_vec();
+    args.extend(["--memory-budget", "0.0001", "--rays", "r.rays"]);
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}
+
 /// See: issue 32, item 1 (left over). A scene at 2e37 (inside the `f32`
 /// limit of about 2.1e37) is framed from a camera beyond it. Every named
 /// accelerator refuses the first pixel's ray with the remedy; `--accel auto`
