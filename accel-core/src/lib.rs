@@ -26,6 +26,49 @@
 //! [`spawn`] (where secondary rays start: a fixed epsilon or pbrt-v4's
 //! error-bound offset).
 //!
+//! **Embedding.** Every accelerator holds its primitives without copying
+//! them: borrowed (`new`, `with_params`: `Grid<'a, T, P>`, tied to the
+//! borrow), or shared through an [`Arc`](std::sync::Arc) (`shared`,
+//! `shared_with_params`: `Grid<'static, T, P, Arc<P>>`, alias `SharedGrid<T,
+//! P>`). A shared one keeps its primitives alive itself, so an application
+//! can keep a mesh and its accelerator in one struct and return both from
+//! the function that loaded them:
+//!
+//! ```
+//! use accel_core::{Accelerator, BruteForce, Ray, SharedBruteForce, TriangleMesh, Vec3};
+//! use std::sync::Arc;
+//!
+//! struct Scene {
+//!     mesh: Arc<TriangleMesh<f32>>,
+//!     accel: SharedBruteForce<f32, TriangleMesh<f32>>,
+//! }
+//!
+//! fn load() -> Result<Scene, Box<dyn std::error::Error>> {
+//!     let mesh = Arc::new(TriangleMesh::new(
+//!         vec![[0.0f32, 0.0, 1.0].into(), [1.0, 0.0, 1.0].into(), [0.0, 1.0, 1.0].into()],
+//!         vec![[0, 1, 2]],
+//!     )?);
+//!     let accel = BruteForce::shared(Arc::clone(&mesh))?;
+//!     Ok(Scene { mesh, accel })
+//! }
+//!
+//! let scene = load()?;
+//! let ray = Ray::new(Vec3::new(0.25, 0.25, 0.0), Vec3::new(0.0, 0.0, 1.0))?;
+//! assert_eq!(scene.accel.intersect(&ray)?.map(|h| h.prim), Some(0));
+//! assert!(std::ptr::eq(scene.accel.primitives(), &*scene.mesh));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! The extra type parameter (`S`, the holder: `&'a P` by default) is
+//! resolved at compile time: a shared accelerator's queries run the same
+//! code as a borrowing one's. (An enum of the two holders would have made
+//! every accelerator over a `Sync` but not `Send` primitive set lose its
+//! `Sync`, since `Arc<P>` is `Sync` only for `P: Send + Sync`.)
+//!
+//! **glam.** [`Vec3`] converts to and from the glam this crate depends on,
+//! re-exported as [`glam`]; vectors of any other glam version convert
+//! through arrays (`Vec3::from(v.to_array())`, `<[f32; 3]>::from(w)`).
+//!
 //! With the `scenes` feature, [`scenes`] generates the workspace's benchmark
 //! scenes and rays; with `gltf`, [`gltf_scene`] loads glTF 2.0 files.
 //!
@@ -66,6 +109,12 @@ mod vec3;
 
 #[cfg(feature = "gltf")]
 pub mod gltf_scene;
+
+/// The glam version [`Vec3`]'s `From` conversions are written for (0.34):
+/// use it to name those types without depending on glam yourself. With a
+/// different glam version, convert through arrays (`[T; 3]`), which every
+/// version supports, since `From` holds for one version's types only.
+pub use glam;
 #[cfg(feature = "scenes")]
 pub mod scenes;
 
@@ -75,7 +124,7 @@ pub use accelerator::{
     validate_region,
 };
 pub use bounds::{SceneSurvey, bounds_survey, bounds_union, check_range, primitive_bounds};
-pub use brute::BruteForce;
+pub use brute::{BruteForce, SharedBruteForce};
 pub use error::BuildError;
 pub use hit::{Hit, PrimHit, nearer};
 pub use mailbox::Mailbox;

@@ -3,6 +3,23 @@
 //! glam's vectors are concrete (`Vec3`, `DVec3`); the accelerators need one
 //! implementation for both precisions, so this small type carries the
 //! arithmetic and converts to and from glam at the edges.
+//!
+//! The `From` conversions to and from glam are for the one glam version this
+//! crate depends on (re-exported as [`crate::glam`]): a `glam::Vec3` of
+//! another version is another type. Arrays are the version-tolerant path:
+//! every glam version converts its vectors to and from `[f32; 3]` /
+//! `[f64; 3]` (`to_array`, `from_array`, `From`), and so does [`Vec3`]
+//! (`From<[T; 3]>` both ways):
+//!
+//! ```
+//! use accel_core::Vec3;
+//!
+//! // A vector of whatever glam version the application uses, as an array.
+//! let theirs: [f32; 3] = [1.0, -2.0, 0.5];
+//! let v = Vec3::from(theirs);
+//! let back: [f32; 3] = v.into();
+//! assert_eq!(back, theirs);
+//! ```
 
 use crate::Real;
 use core::ops::{Add, AddAssign, Div, Index, IndexMut, Mul, Neg, Sub, SubAssign};
@@ -259,10 +276,21 @@ impl<T: Real> Neg for Vec3<T> {
     }
 }
 
+/// From an array `[x, y, z]`: the path for vectors of any glam version
+/// (`v.to_array().into()`), or of any other vector crate.
 impl<T> From<[T; 3]> for Vec3<T> {
     #[inline]
     fn from([x, y, z]: [T; 3]) -> Self {
         Self { x, y, z }
+    }
+}
+
+/// To an array `[x, y, z]`: the path to vectors of any glam version
+/// (`glam::Vec3::from(<[f32; 3]>::from(v))`), or of any other vector crate.
+impl<T> From<Vec3<T>> for [T; 3] {
+    #[inline]
+    fn from(v: Vec3<T>) -> Self {
+        [v.x, v.y, v.z]
     }
 }
 
@@ -313,6 +341,34 @@ mod tests {
         assert_eq!(Vec3::new(1.0f32, 1.0, 0.0).max_dimension(), 0);
         assert_eq!(Vec3::new(0.0f32, 2.0, 2.0).max_dimension(), 1);
         assert_eq!(Vec3::new(0.0f32, 1.0, 2.0).max_dimension(), 2);
+    }
+
+    #[test]
+    fn array_round_trip() {
+        // Distinct components, so a swapped pair would show.
+        let a = [1.5f32, -0.0, 3.0e38];
+        let v = Vec3::from(a);
+        assert_eq!((v.x, v.y, v.z), (1.5, -0.0, 3.0e38));
+        assert!(v.y.is_sign_negative());
+        let back: [f32; 3] = v.into();
+        assert_eq!(back.map(f32::to_bits), a.map(f32::to_bits));
+        let d = [f64::MIN_POSITIVE, 2.0, -7.25];
+        assert_eq!(<[f64; 3]>::from(Vec3::from(d)), d);
+        assert_eq!(Vec3::from(d).to_array(), d);
+    }
+
+    #[test]
+    fn glam_through_arrays() {
+        // The path for another glam version: its arrays, not its types.
+        let g = crate::glam::Vec3::new(0.25, -4.0, 9.5);
+        let v = Vec3::from(g.to_array());
+        assert_eq!(v, Vec3::new(0.25, -4.0, 9.5));
+        assert_eq!(crate::glam::Vec3::from_array(v.into()), g);
+        let dg = crate::glam::DVec3::new(1e300, -1e-300, 3.0);
+        assert_eq!(
+            crate::glam::DVec3::from(<[f64; 3]>::from(Vec3::from(dg.to_array()))),
+            dg
+        );
     }
 
     #[test]

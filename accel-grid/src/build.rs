@@ -196,21 +196,49 @@ pub const BLOCK_SHIFT: u32 = 2;
 /// The default of [`GridParams::layout`].
 pub const DEFAULT_LAYOUT: Layout = Layout::Indexed;
 
-/// Primitives whose cells [`check_reference_estimate`] counts.
+/// Primitives whose cells [`estimate_references`] counts.
 pub const REFERENCE_SAMPLE: usize = 256;
 
+/// An estimate of the references a build over `n` items would make, from
+/// the cells of [`REFERENCE_SAMPLE`] of them spread evenly over the `n`
+/// (every `n / 256`-th; `item(k)` names the `k`-th), scaled to `n`; `None`
+/// for up to four samples' worth of items, which the exact build counts
+/// quickly enough.
+///
+/// Counting a sample first is what lets a build refuse a scene over its
+/// budget before making its cell lists: 100,000 copies of one triangle
+/// across the scene took minutes to be refused by the exact build (issue
+/// 32, item 3), the sample takes 256 of them. The octree checks its root
+/// grids with it too.
+pub fn estimate_references<V: CellVisitor>(
+    visitor: &V,
+    n: usize,
+    item: impl Fn(usize) -> u32 + Sync,
+) -> Option<u64> {
+    if n <= 4 * REFERENCE_SAMPLE {
+        return None;
+    }
+    let stride = n / REFERENCE_SAMPLE;
+    let counted: u64 = (0..REFERENCE_SAMPLE)
+        .into_par_iter()
+        .map(|k| {
+            let mut cells = 0u64;
+            // Below n: k·stride + stride/2 < 256·stride <= n.
+            visitor.visit(item(k * stride + stride / 2), |_| cells += 1);
+            cells
+        })
+        .sum();
+    Some((counted as f64 * (n as f64 / REFERENCE_SAMPLE as f64)) as u64)
+}
+
 /// Refuses, before the cell lists are made, a build whose references
-/// clearly pass `budget`: the cells of [`REFERENCE_SAMPLE`] primitives
-/// spread evenly over the `n` (every `n / 256`-th) are counted, and an
-/// estimate of more than twice the budget is refused with it.
+/// clearly pass `budget`: an estimate ([`estimate_references`]) of more
+/// than twice the budget is refused with it.
 ///
 /// The exact build also stops the moment it passes the budget, but only
 /// after enumerating (and testing) every cell of the primitives before that
-/// point: 100,000 copies of one triangle across the scene took minutes to be
-/// refused that way (issue 32, item 3), and this sample takes 256 of them.
-/// A scene of up to four samples' worth of primitives is left to the exact
-/// build; between the budget and twice it, so is a scene the sample might
-/// overestimate.
+/// point. A scene the sample leaves out is left to the exact build; between
+/// the budget and twice it, so is a scene the sample might overestimate.
 ///
 /// # Errors
 /// [`BuildError::BudgetExceeded`] with the estimate.
@@ -220,30 +248,16 @@ fn check_reference_estimate<V: CellVisitor>(
     n: usize,
     budget: u64,
 ) -> Result<(), BuildError> {
-    if n <= 4 * REFERENCE_SAMPLE {
-        return Ok(());
+    match estimate_references(visitor, n, |i| items.map_or(i as u32, |items| items[i])) {
+        Some(estimate) if estimate as f64 > 2.0 * budget as f64 => {
+            Err(BuildError::BudgetExceeded {
+                what: "cell references (estimated from 256 primitives spread over the scene)",
+                needed: estimate,
+                budget,
+            })
+        }
+        _ => Ok(()),
     }
-    let stride = n / REFERENCE_SAMPLE;
-    let counted: u64 = (0..REFERENCE_SAMPLE)
-        .into_par_iter()
-        .map(|k| {
-            let mut cells = 0u64;
-            // Below n: k·stride + stride/2 < 256·stride <= n.
-            let i = k * stride + stride / 2;
-            let item = items.map_or(i as u32, |items| items[i]);
-            visitor.visit(item, |_| cells += 1);
-            cells
-        })
-        .sum();
-    let estimate = counted as f64 * (n as f64 / REFERENCE_SAMPLE as f64);
-    if estimate > 2.0 * budget as f64 {
-        return Err(BuildError::BudgetExceeded {
-            what: "cell references (estimated from 256 primitives spread over the scene)",
-            needed: estimate as u64,
-            budget,
-        });
-    }
-    Ok(())
 }
 
 /// Builds the parts of a grid over `prims`: one grid over the whole scene

@@ -6,16 +6,24 @@ use crate::cells::GridGeometry;
 use crate::csr::CellLists;
 use accel_core::packed::PackedTriangles;
 use accel_core::{AccelStats, BuildError, PrimitiveSet, Real};
+use core::borrow::Borrow;
+use core::marker::PhantomData;
+use std::sync::Arc;
 
 /// A uniform grid over a primitive set (see the crate docs).
 ///
-/// It borrows the primitives and stores only `u32` indices into them. A
+/// It stores only `u32` indices into the primitives, which it holds as `S`:
+/// borrowed (`&'a P`, the default: [`Grid::new`], [`Grid::with_params`]) or
+/// shared ([`Arc<P>`]: [`Grid::shared`], [`Grid::shared_with_params`], a
+/// [`SharedGrid`]), which lets an application keep the grid beside its
+/// primitives in one struct (accel-core's crate docs, "Embedding"). A
 /// scene with a small dense part in a large sparse space, or a floor of many
 /// flat primitives, is gridded in parts ([`GridParams::parts`]): a uniform
 /// grid per part, walked one after the other.
 #[derive(Debug)]
-pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
-    pub(crate) prims: &'a P,
+pub struct Grid<'a, T: Real, P: PrimitiveSet<T> + ?Sized, S = &'a P> {
+    pub(crate) prims: S,
+    pub(crate) borrows: PhantomData<&'a P>,
     /// The first part: the whole grid of a scene in one part (nearly every
     /// scene), kept inline so its queries load nothing more.
     pub(crate) first: GridPart<T>,
@@ -76,12 +84,43 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     /// [`BuildError`] for non-finite primitives, an invalid density or region,
     /// or an exceeded cell or reference budget.
     pub fn with_params(prims: &'a P, params: &GridParams<T>) -> Result<Self, BuildError> {
-        let built = build(prims, params)?;
+        Self::over(prims, params)
+    }
+}
+
+/// A [`Grid`] that shares its primitives through an [`Arc`].
+pub type SharedGrid<T, P> = Grid<'static, T, P, Arc<P>>;
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'static, T, P, Arc<P>> {
+    /// [`Grid::new`] over primitives it shares: the grid keeps them alive
+    /// itself, so it can be kept beside them in one struct or returned from
+    /// the function that loaded them.
+    ///
+    /// # Errors
+    /// As [`Grid::new`].
+    pub fn shared(prims: Arc<P>) -> Result<Self, BuildError> {
+        Self::over(prims, &GridParams::default())
+    }
+
+    /// [`Grid::with_params`] over primitives it shares (see [`Grid::shared`]).
+    ///
+    /// # Errors
+    /// As [`Grid::with_params`].
+    pub fn shared_with_params(prims: Arc<P>, params: &GridParams<T>) -> Result<Self, BuildError> {
+        Self::over(prims, params)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
+    /// Builds a grid over the primitives `held` holds, and keeps them.
+    fn over(held: S, params: &GridParams<T>) -> Result<Self, BuildError> {
+        let built = build(held.borrow(), params)?;
         let mut parts = built.parts.into_iter();
         let first = parts.next().expect("a build makes at least one part");
         let rest: Vec<GridPart<T>> = parts.collect();
         let grid = Self {
-            prims,
+            prims: held,
+            borrows: PhantomData,
             empty: first.cells.reference_count() == 0 && rest.is_empty(),
             first,
             rest,
@@ -122,9 +161,10 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     }
 
     /// The indexed primitives.
+    #[inline]
     #[must_use]
-    pub fn primitives(&self) -> &'a P {
-        self.prims
+    pub fn primitives(&self) -> &P {
+        self.prims.borrow()
     }
 
     /// Checks the structure's invariants: offsets monotone and covering the
@@ -134,9 +174,10 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'a, T, P> {
     /// # Errors
     /// A message naming the first broken invariant.
     pub fn validate(&self) -> Result<(), String> {
-        let mut seen = vec![false; self.prims.len()];
+        let prims = self.primitives();
+        let mut seen = vec![false; prims.len()];
         for (k, part) in self.parts().enumerate() {
-            part.validate(self.prims, &mut seen)
+            part.validate(prims, &mut seen)
                 .map_err(|e| format!("part {k}: {e}"))?;
         }
         Ok(())

@@ -62,6 +62,12 @@
 //! assert_eq!(hit.map(|h| h.t), Some(1.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! **Holding the primitives.** A [`Grid`] borrows them ([`Grid::new`],
+//! `&'a P`) or shares them through an `Arc` ([`Grid::shared`], a
+//! [`SharedGrid`] with no borrow), so an application can keep the grid beside its
+//! mesh in one struct; the queries are the same code either way (accel-core's
+//! crate docs, "Embedding"; `accel-kdtree/examples/embedded.rs`).
 
 pub mod blocks;
 pub mod build;
@@ -73,7 +79,7 @@ pub mod resolution;
 mod traverse;
 
 pub use build::{DEFAULT_LAYOUT, GridParams};
-pub use grid::{Grid, GridPart};
+pub use grid::{Grid, GridPart, SharedGrid};
 
 /// The README's library example, compiled and run as a doc test.
 #[cfg(doctest)]

@@ -8,6 +8,7 @@ use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
     TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
+use core::borrow::Borrow;
 
 impl<T: Real> GridPart<T> {
     /// The references of cell `c`, by its occupancy bit first if `BITS`
@@ -192,7 +193,7 @@ impl<T: Real> GridPart<T> {
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
     /// The nearest hit, part by part (the later parts with the best hit of
     /// the earlier); a grid of one part, nearly every grid, without the
     /// loop.
@@ -209,12 +210,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
             let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
                 return Ok(None);
             };
-            return Ok(self.first.nearest(self.prims, &tr, None, counter));
+            return Ok(self.first.nearest(self.primitives(), &tr, None, counter));
         }
-        let wide = self.prims.wide_hits();
+        let wide = self.primitives().wide_hits();
         Ok(self.parts().fold(None, |best, part| {
             match part_beam(ray, part.geometry.bounds(), wide) {
-                Some(tr) => part.nearest(self.prims, &tr, best, counter),
+                Some(tr) => part.nearest(self.primitives(), &tr, best, counter),
                 None => best,
             }
         }))
@@ -230,17 +231,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Grid<'_, T, P> {
             let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
                 return Ok(false);
             };
-            return Ok(self.first.any(self.prims, &tr, counter));
+            return Ok(self.first.any(self.primitives(), &tr, counter));
         }
-        let wide = self.prims.wide_hits();
+        let wide = self.primitives().wide_hits();
         Ok(self.parts().any(|part| {
             part_beam(ray, part.geometry.bounds(), wide)
-                .is_some_and(|tr| part.any(self.prims, &tr, counter))
+                .is_some_and(|tr| part.any(self.primitives(), &tr, counter))
         }))
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
+    for Grid<'_, T, P, S>
+{
     fn bounds(&self) -> Aabb<T> {
         if self.empty {
             Aabb::empty()
@@ -292,7 +295,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Grid<'_, T, P> {
                 found.extend_from_slice(part.cells.cell(c));
             });
         }
-        Ok(region_matches(self.prims, region, found))
+        Ok(region_matches(self.primitives(), region, found))
     }
 
     fn stats(&self) -> AccelStats {

@@ -69,6 +69,12 @@
 //! assert_eq!(hit.map(|h| h.t), Some(1.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! **Holding the primitives.** A [`KdTree`] borrows them ([`KdTree::new`],
+//! `&'a P`) or shares them through an `Arc` ([`KdTree::shared`], a
+//! [`SharedKdTree`] with no borrow), so an application can keep the tree beside its
+//! mesh in one struct; the queries are the same code either way (accel-core's
+//! crate docs, "Embedding"; `accel-kdtree/examples/embedded.rs`).
 
 mod build;
 mod naive;
@@ -82,4 +88,4 @@ mod validate;
 pub use build::KdPart;
 pub use node::KdNode;
 pub use params::KdTreeParams;
-pub use tree::KdTree;
+pub use tree::{KdTree, SharedKdTree};

@@ -13,12 +13,13 @@
 use crate::build::decode_split;
 use crate::tree::KdTree;
 use accel_core::{Aabb, PrimitiveSet, Real, TRAVERSAL_ROUNDINGS};
+use core::borrow::Borrow;
 
 /// For each node of `tree` (leaves included, unused there), the largest side
 /// of the box holding the node's region and the whole bounds of every
 /// primitive referenced below it, rounded up.
-pub(crate) fn node_reaches<T: Real, P: PrimitiveSet<T> + ?Sized>(
-    tree: &KdTree<'_, T, P>,
+pub(crate) fn node_reaches<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+    tree: &KdTree<'_, T, P, S>,
 ) -> Vec<T> {
     let mut reach = vec![T::ZERO; tree.nodes.len()];
     for part in &tree.parts {
@@ -36,10 +37,11 @@ pub(crate) fn node_reaches<T: Real, P: PrimitiveSet<T> + ?Sized>(
 /// noticeable part of a typical leaf, and rays visit extra ones (a small
 /// dense mesh in a large scene); on dense scenes it is thousands of times
 /// thinner and narrowing changes no visit.
-pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized>(
-    tree: &KdTree<'_, T, P>,
+pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+    tree: &KdTree<'_, T, P, S>,
 ) -> bool {
-    let n = tree.prims.len();
+    let prims = tree.primitives();
+    let n = prims.len();
     if n == 0 || tree.nodes.is_empty() {
         return false;
     }
@@ -47,7 +49,7 @@ pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut sizes: Vec<T> = (0..n)
         .step_by(step)
         .map(|i| {
-            let b = tree.prims.bounds(i);
+            let b = prims.bounds(i);
             (b.max - b.min).max_component()
         })
         .collect();
@@ -58,7 +60,7 @@ pub(crate) fn narrowing_pays<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let scene = (tree.bounds.max - tree.bounds.min).max_component();
     // A set with wide hits is walked with the wide type's beam
     // ([`accel_core::TraversalRay::with_wide_hits`]), already that thin.
-    let gamma = if tree.prims.wide_hits() {
+    let gamma = if prims.wide_hits() {
         T::from_wide(<T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS))
     } else {
         T::gamma(TRAVERSAL_ROUNDINGS)
@@ -73,17 +75,18 @@ const SIZE_SAMPLE: usize = 4096;
 /// The box holding node `i`'s `region` and its primitives' bounds; records
 /// its largest side in `reach[i]`. Recursion depth is the tree's depth
 /// (at most [`crate::KdTreeParams::MAX_DEPTH`]).
-fn reach_box<T: Real, P: PrimitiveSet<T> + ?Sized>(
-    tree: &KdTree<'_, T, P>,
+fn reach_box<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+    tree: &KdTree<'_, T, P, S>,
     i: usize,
     region: Aabb<T>,
     reach: &mut [T],
 ) -> Aabb<T> {
     let node = &tree.nodes[i];
+    let prims = tree.primitives();
     let held = if node.is_leaf() {
         tree.leaf_primitives(node)
             .iter()
-            .fold(region, |b, &p| b.union(&tree.prims.bounds(p as usize)))
+            .fold(region, |b, &p| b.union(&prims.bounds(p as usize)))
     } else {
         let (axis, s) = (node.axis(), decode_split(node.split_word(), &tree.splits));
         let (below, above) = region.split_at(axis, s);

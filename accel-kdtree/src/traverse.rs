@@ -26,6 +26,7 @@ use accel_core::{
     TraversalCounters, TraversalRay, Vec3, nearer, region_matches, region_search_box,
     validate_region,
 };
+use core::borrow::Borrow;
 
 /// Traversal stack entries: at most one per level.
 const STACK: usize = crate::KdTreeParams::MAX_DEPTH as usize;
@@ -158,7 +159,7 @@ fn finite_band<T: Real>(delta: T, inv: T, half_inv: T, s: T, o: T) -> (T, T) {
     (tc - half, tc + half)
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     /// Walks the leaves the beam touches, front to back, narrowing the beam
     /// below each node where the tree says it pays.
     #[inline]
@@ -295,7 +296,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// otherwise.
     #[inline]
     fn traversal_ray(&self, ray: &Ray<T>, bounds: &Aabb<T>) -> Option<TraversalRay<T>> {
-        if self.prims.wide_hits() {
+        if self.primitives().wide_hits() {
             TraversalRay::with_wide_hits(ray, bounds)
         } else {
             TraversalRay::new(ray, bounds)
@@ -334,7 +335,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             return best;
         };
         let mut v = Nearest {
-            prims: self.prims,
+            prims: self.primitives(),
             packed: self.packed.as_ref(),
             tr: &tr,
             mailbox: Mailbox::new(),
@@ -364,7 +365,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
             return false;
         };
         let mut v = AnyHit {
-            prims: self.prims,
+            prims: self.primitives(),
             packed: self.packed.as_ref(),
             tr: &tr,
             mailbox: Mailbox::new(),
@@ -375,7 +376,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
+    for KdTree<'_, T, P, S>
+{
     fn bounds(&self) -> Aabb<T> {
         self.bounds
     }
@@ -437,7 +440,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for KdTree<'_, T, P> {
                 stack.extend(above.filter(|_| grown.max[axis] >= s));
             }
         }
-        Ok(region_matches(self.prims, region, found))
+        Ok(region_matches(self.primitives(), region, found))
     }
 
     fn stats(&self) -> AccelStats {

@@ -6,17 +6,24 @@ use crate::params::KdTreeParams;
 use crate::reach::{narrowing_pays, node_reaches};
 use accel_core::packed::PackedTriangles;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
-use std::sync::OnceLock;
+use core::borrow::Borrow;
+use core::marker::PhantomData;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 /// A SAH kD-tree over a primitive set (see the crate docs).
 ///
-/// It borrows the primitives and stores only `u32` indices into them: 8-byte
-/// nodes in depth-first order, one flat reference array for the leaves, and
-/// (for `f64` trees) a table of split positions.
+/// It stores only `u32` indices into the primitives: 8-byte nodes in
+/// depth-first order, one flat reference array for the leaves, and (for
+/// `f64` trees) a table of split positions. It holds the primitives as `S`:
+/// borrowed (`&'a P`, the default: [`KdTree::new`], [`KdTree::with_params`])
+/// or shared ([`Arc<P>`]: [`KdTree::shared`], [`KdTree::shared_with_params`],
+/// a [`SharedKdTree`]), which lets an application keep the tree beside its
+/// primitives in one struct (accel-core's crate docs, "Embedding").
 #[derive(Debug)]
-pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
-    pub(crate) prims: &'a P,
+pub struct KdTree<'a, T: Real, P: PrimitiveSet<T> + ?Sized, S = &'a P> {
+    pub(crate) prims: S,
+    pub(crate) borrows: PhantomData<&'a P>,
     pub(crate) nodes: Vec<KdNode>,
     pub(crate) refs: Vec<u32>,
     pub(crate) splits: Vec<T>,
@@ -70,16 +77,44 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
     pub fn with_params_naive(prims: &'a P, params: &KdTreeParams) -> Result<Self, BuildError> {
         Self::assemble(prims, params, true)
     }
+}
 
-    fn assemble(prims: &'a P, params: &KdTreeParams, naive: bool) -> Result<Self, BuildError> {
-        let built = build(prims, params, naive)?;
+/// A [`KdTree`] that shares its primitives through an [`Arc`].
+pub type SharedKdTree<T, P> = KdTree<'static, T, P, Arc<P>>;
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'static, T, P, Arc<P>> {
+    /// [`KdTree::new`] over primitives it shares: the tree keeps them alive
+    /// itself, so it can be kept beside them in one struct or returned from
+    /// the function that loaded them.
+    ///
+    /// # Errors
+    /// As [`KdTree::new`].
+    pub fn shared(prims: Arc<P>) -> Result<Self, BuildError> {
+        Self::assemble(prims, &KdTreeParams::default(), false)
+    }
+
+    /// [`KdTree::with_params`] over primitives it shares (see
+    /// [`KdTree::shared`]).
+    ///
+    /// # Errors
+    /// As [`KdTree::with_params`].
+    pub fn shared_with_params(prims: Arc<P>, params: &KdTreeParams) -> Result<Self, BuildError> {
+        Self::assemble(prims, params, false)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
+    /// Builds a tree over the primitives `held` holds, and keeps them.
+    fn assemble(held: S, params: &KdTreeParams, naive: bool) -> Result<Self, BuildError> {
+        let built = build(held.borrow(), params, naive)?;
         let Out {
             nodes,
             refs,
             splits,
         } = built.out;
         let mut tree = Self {
-            prims,
+            prims: held,
+            borrows: PhantomData,
             nodes,
             refs,
             splits,
@@ -100,7 +135,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
         }
         tree.packed = PackedTriangles::new(
             params.layout,
-            prims,
+            tree.prims.borrow(),
             &tree.refs,
             tree.nodes
                 .iter()
@@ -127,7 +162,7 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
                 &self.parts,
                 &self.bounds,
                 &self.params,
-                self.prims.len(),
+                self.primitives().len(),
             );
             stats.build_time = self.build_time;
             stats.bytes = self.nodes.capacity() * size_of::<KdNode>()
@@ -206,8 +241,9 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'a, T, P> {
     }
 
     /// The indexed primitives.
+    #[inline]
     #[must_use]
-    pub fn primitives(&self) -> &'a P {
-        self.prims
+    pub fn primitives(&self) -> &P {
+        self.prims.borrow()
     }
 }

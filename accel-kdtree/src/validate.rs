@@ -5,8 +5,9 @@ use crate::build::depth::{Depth, isolates};
 use crate::build::{decode_split, inline_splits};
 use crate::tree::KdTree;
 use accel_core::{Aabb, PrimitiveSet, Real};
+use core::borrow::Borrow;
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     /// Checks the tree's invariants: every node reached exactly once from the
     /// roots of the parts, one part after the other, in depth-first order (below child next, above child after the
     /// below subtree), empty leaves not stored but marked in their parent
@@ -20,7 +21,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
     /// # Errors
     /// A message naming the first broken invariant.
     pub fn validate(&self) -> Result<(), String> {
-        let n = self.prims.len();
+        let n = self.primitives().len();
         if self.nodes.is_empty() {
             return Err("no root node".into());
         }
@@ -77,7 +78,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> KdTree<'_, T, P> {
                         ));
                     };
                     *seen = true;
-                    if !self.prims.bounds(p as usize).overlaps(&b) {
+                    if !self.primitives().bounds(p as usize).overlaps(&b) {
                         return Err(format!(
                             "leaf {i}: primitive {p} lies outside the leaf's box"
                         ));

@@ -14,7 +14,7 @@ use crate::node::{CHILD, MAX_PRIMITIVES, Node};
 use crate::params::{OctreeParams, ResolutionRule};
 use accel_core::parts::{Group, partition_with_floor};
 use accel_core::{Aabb, BuildError, PrimitiveSet, Real, Vec3, primitive_bounds};
-use accel_grid::build::PrimitiveCells;
+use accel_grid::build::{PrimitiveCells, estimate_references};
 use accel_grid::cells::GridGeometry;
 use accel_grid::csr::CellLists;
 use rayon::prelude::*;
@@ -259,6 +259,19 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
             region: None,
         };
         let max_references = (budget - bytes) / 4;
+        // Refused from a sample before the cell lists are made, as the
+        // uniform grid is: the exact build below stops at the budget only
+        // after enumerating the cells of every primitive before that point.
+        let estimate = estimate_references(&visitor, count, |k| {
+            items.map_or(k as u32, |items| items[k])
+        });
+        if let Some(estimate) = estimate.filter(|&e| e as f64 > 2.0 * max_references as f64) {
+            return Err(BuildError::BudgetExceeded {
+                what: "octree bytes (the root grid's references estimated from 256 primitives spread over the scene)",
+                needed: bytes.saturating_add(estimate.saturating_mul(4)),
+                budget,
+            });
+        }
         let lists = match items {
             Some(items) => {
                 CellLists::build_items(geometry.cell_count(), items, max_references, &visitor)?

@@ -61,6 +61,12 @@
 //! assert_eq!(hit.map(|h| h.t), Some(1.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! **Holding the primitives.** A [`Octree`] borrows them ([`Octree::new`],
+//! `&'a P`) or shares them through an `Arc` ([`Octree::shared`], a
+//! [`SharedOctree`] with no borrow), so an application can keep the octree beside its
+//! mesh in one struct; the queries are the same code either way (accel-core's
+//! crate docs, "Embedding"; `accel-kdtree/examples/embedded.rs`).
 
 mod build;
 mod node;
@@ -71,7 +77,7 @@ mod traverse;
 mod validate;
 
 pub use node::{LevelStats, MAX_PRIMITIVES};
-pub use octree::Octree;
+pub use octree::{Octree, SharedOctree};
 pub use params::{MAX_DEPTH, OctreeParams, ResolutionRule};
 
 /// The README's example, compiled and run as a doc test.

@@ -9,14 +9,22 @@ use accel_core::packed::PackedTriangles;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real};
 use accel_grid::cells::GridGeometry;
 use accel_grid::csr::CellLists;
+use core::borrow::Borrow;
+use core::marker::PhantomData;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// An octree of nested uniform grids over a primitive set (see the crate docs).
 ///
-/// It borrows the primitives and stores only `u32` indices into them.
+/// It stores only `u32` indices into the primitives, which it holds as `S`:
+/// borrowed (`&'a P`, the default: [`Octree::new`], [`Octree::with_params`])
+/// or shared ([`Arc<P>`]: [`Octree::shared`], [`Octree::shared_with_params`],
+/// a [`SharedOctree`]), which lets an application keep the octree beside its
+/// primitives in one struct (accel-core's crate docs, "Embedding").
 #[derive(Debug)]
-pub struct Octree<'a, T: Real, P: PrimitiveSet<T> + ?Sized> {
-    pub(crate) prims: &'a P,
+pub struct Octree<'a, T: Real, P: PrimitiveSet<T> + ?Sized, S = &'a P> {
+    pub(crate) prims: S,
+    pub(crate) borrows: PhantomData<&'a P>,
     /// The grids: the root of each part first, then every other grid after
     /// its parent.
     pub(crate) nodes: Vec<Node<T>>,
@@ -56,7 +64,42 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
     /// # Panics
     /// In debug builds, if [`Octree::validate`] finds a broken invariant (a bug).
     pub fn with_params(prims: &'a P, params: &OctreeParams) -> Result<Self, BuildError> {
+        Self::over(prims, params)
+    }
+}
+
+/// An [`Octree`] that shares its primitives through an [`Arc`].
+pub type SharedOctree<T, P> = Octree<'static, T, P, Arc<P>>;
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'static, T, P, Arc<P>> {
+    /// [`Octree::new`] over primitives it shares: the octree keeps them
+    /// alive itself, so it can be kept beside them in one struct or returned
+    /// from the function that loaded them.
+    ///
+    /// # Errors
+    /// As [`Octree::new`].
+    pub fn shared(prims: Arc<P>) -> Result<Self, BuildError> {
+        Self::over(prims, &OctreeParams::default())
+    }
+
+    /// [`Octree::with_params`] over primitives it shares (see
+    /// [`Octree::shared`]).
+    ///
+    /// # Errors
+    /// As [`Octree::with_params`].
+    ///
+    /// # Panics
+    /// As [`Octree::with_params`].
+    pub fn shared_with_params(prims: Arc<P>, params: &OctreeParams) -> Result<Self, BuildError> {
+        Self::over(prims, params)
+    }
+}
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
+    /// Builds an octree over the primitives `held` holds, and keeps them.
+    fn over(held: S, params: &OctreeParams) -> Result<Self, BuildError> {
         let start = Instant::now();
+        let prims = held.borrow();
         let built = build(prims, params)?;
         let levels = level_stats(&built.nodes, &built.cells);
         let packed = PackedTriangles::new(
@@ -94,7 +137,8 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
             .iter()
             .fold(Aabb::empty(), |b, n| b.union(n.geometry.bounds()));
         let octree = Self {
-            prims,
+            prims: held,
+            borrows: PhantomData,
             parts: built.parts,
             bounds,
             empty: built.cells.reference_count() == 0,
@@ -147,8 +191,9 @@ impl<'a, T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'a, T, P> {
     }
 
     /// The indexed primitives.
+    #[inline]
     #[must_use]
-    pub fn primitives(&self) -> &'a P {
-        self.prims
+    pub fn primitives(&self) -> &P {
+        self.prims.borrow()
     }
 }

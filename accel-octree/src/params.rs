@@ -141,7 +141,10 @@ pub struct OctreeParams {
     /// cross the cell beside it skip it in one box test. Default `true`.
     pub fit_children: bool,
     /// The most heap bytes the octree may take. A root grid over the budget
-    /// is refused with [`BuildError::BudgetExceeded`]; child grids are added
+    /// is refused with [`BuildError::BudgetExceeded`], from a sample of its
+    /// primitives' cells before its cell lists are made where the sample
+    /// puts it past twice the budget
+    /// ([`accel_grid::build::estimate_references`]); child grids are added
     /// level by level in cell order until the next one would exceed it, and
     /// the cells left over stay leaves. Default 2 GiB.
     pub max_bytes: u64,

@@ -24,6 +24,7 @@ use accel_core::{
     region_matches, region_search_box, validate_region,
 };
 use accel_grid::dda::BeamWalk;
+use core::borrow::Borrow;
 
 /// The beam for walking `node`: the parent's, narrowed to the rounding of
 /// what the node holds.
@@ -76,21 +77,23 @@ fn child_start<T: Real>(tr: &TraversalRay<T>, node: &Node<T>, limit: T) -> Optio
     (from <= t1 && from <= limit).then_some(from)
 }
 
-/// What every query of one ray keeps: the tree, the prepared ray, the hit
-/// tolerance's scale, the mailbox and the work counter.
-struct Query<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
-    tree: &'q Octree<'a, T, P>,
+/// What every query of one ray keeps: the tree and its primitives, the
+/// prepared ray, the hit tolerance's scale, the mailbox and the work counter.
+struct Query<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S, C> {
+    tree: &'q Octree<'a, T, P, S>,
+    prims: &'q P,
     prepared: PreparedRay<T>,
     inv_max_d: T,
     mailbox: Mailbox,
     counter: &'q mut C,
 }
 
-impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> Query<'q, 'a, T, P, C> {
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C> Query<'q, 'a, T, P, S, C> {
     /// A query of `tree` for the prepared ray.
-    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+    fn new(tree: &'q Octree<'a, T, P, S>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
         Self {
             tree,
+            prims: tree.primitives(),
             inv_max_d: tolerance_scale(&prepared.ray),
             prepared,
             mailbox: Mailbox::new(),
@@ -100,14 +103,16 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> Query<'q, 'a, T, P, C> {
 }
 
 /// The state of one nearest-hit query.
-struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
-    q: Query<'q, 'a, T, P, C>,
+struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S, C> {
+    q: Query<'q, 'a, T, P, S, C>,
     best: Option<Hit<T>>,
 }
 
-impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, 'a, T, P, C> {
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
+    Nearest<'q, 'a, T, P, S, C>
+{
     /// A query of `tree` for the prepared ray, with no hit yet.
-    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+    fn new(tree: &'q Octree<'a, T, P, S>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
         Self {
             q: Query::new(tree, prepared, counter),
             best: None,
@@ -145,7 +150,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, '
     #[inline]
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) {
         self.q.counter.node();
-        let tree = self.q.tree;
+        let (tree, set) = (self.q.tree, self.q.prims);
         let (start, refs) = tree.cells.cell_at(node.cell_index(c));
         let Entry { prims, child } = entry(refs);
         let (q, best) = (&mut self.q, &mut self.best);
@@ -153,7 +158,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, '
             if !q.mailbox.seen(p) {
                 q.counter.prim();
                 let t_max = best.map_or(q.prepared.ray.t_max, |b| b.t);
-                if let Some(h) = tree.prims.intersect(p as usize, &q.prepared, t_max) {
+                if let Some(h) = set.intersect(p as usize, &q.prepared, t_max) {
                     *best = nearer(*best, Hit::new(p, h));
                 }
             }
@@ -170,13 +175,15 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Nearest<'q, '
 }
 
 /// The state of one any-hit query.
-struct Any<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C> {
-    q: Query<'q, 'a, T, P, C>,
+struct Any<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S, C> {
+    q: Query<'q, 'a, T, P, S, C>,
 }
 
-impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T, P, C> {
+impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
+    Any<'q, 'a, T, P, S, C>
+{
     /// A query of `tree` for the prepared ray.
-    fn new(tree: &'q Octree<'a, T, P>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
+    fn new(tree: &'q Octree<'a, T, P, S>, prepared: PreparedRay<T>, counter: &'q mut C) -> Self {
         Self {
             q: Query::new(tree, prepared, counter),
         }
@@ -206,7 +213,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T
     #[inline]
     fn cell(&mut self, node: &Node<T>, tr: &TraversalRay<T>, c: usize) -> bool {
         self.q.counter.node();
-        let tree = self.q.tree;
+        let (tree, set) = (self.q.tree, self.q.prims);
         let (start, refs) = tree.cells.cell_at(node.cell_index(c));
         let Entry { prims, child } = entry(refs);
         let q = &mut self.q;
@@ -216,9 +223,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T
                 return false;
             }
             q.counter.prim();
-            tree.prims
-                .intersect(p as usize, &q.prepared, t_max)
-                .is_some()
+            set.intersect(p as usize, &q.prepared, t_max).is_some()
         }) {
             return true;
         }
@@ -230,7 +235,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, C: CostCounter> Any<'q, 'a, T
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
     /// The nearest hit, counting the work in `counter`: each part's root
     /// walked in turn, on the beam of its own box, the later ones with the
     /// best hit of the earlier. A tree of one part, nearly every tree, takes
@@ -312,7 +317,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     /// part is first tested with the wide type's thin beam).
     #[inline]
     fn part_beam(&self, ray: &Ray<T>, root: &Node<T>) -> Option<TraversalRay<T>> {
-        accel_core::parts::part_beam(ray, root.geometry.bounds(), self.prims.wide_hits())
+        accel_core::parts::part_beam(ray, root.geometry.bounds(), self.primitives().wide_hits())
     }
 
     /// Appends the references of every leaf overlapping `region`.
@@ -330,7 +335,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
     }
 }
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
+    for Octree<'_, T, P, S>
+{
     fn bounds(&self) -> Aabb<T> {
         if self.empty {
             Aabb::empty()
@@ -376,7 +383,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Accelerator<T> for Octree<'_, T, P> {
         for root in &self.nodes[..self.parts] {
             self.gather(root, &grown, &mut found);
         }
-        Ok(region_matches(self.prims, region, found))
+        Ok(region_matches(self.primitives(), region, found))
     }
 
     fn stats(&self) -> AccelStats {

@@ -3,8 +3,9 @@
 use crate::node::{CHILD, Entry, entry};
 use crate::octree::Octree;
 use accel_core::{PrimitiveSet, Real};
+use core::borrow::Borrow;
 
-impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
     /// Checks the structure's invariants:
     /// - the grids' cells tile the shared cell lists in order, and the lists'
     ///   offsets are monotone and cover the reference array;
@@ -42,7 +43,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
         if let Some(i) = offsets.windows(2).position(|w| w[0] > w[1]) {
             return Err(format!("offsets decrease at cell {i}"));
         }
-        let n = self.prims.len();
+        let set = self.primitives();
+        let n = set.len();
         let mut parents = vec![0usize; self.nodes.len()];
         let mut referenced = vec![false; n];
         let mut base = 0usize;
@@ -95,12 +97,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Octree<'_, T, P> {
                             "grid {id} cell {c}: reference {p} out of range ({n} primitives)"
                         ));
                     }
-                    if !self.prims.bounds(p as usize).overlaps(&cell_box) {
+                    if !set.bounds(p as usize).overlaps(&cell_box) {
                         return Err(format!(
                             "grid {id} cell {c}: primitive {p} lies outside the cell"
                         ));
                     }
-                    if !node.reach.contains(&self.prims.bounds(p as usize)) {
+                    if !node.reach.contains(&set.bounds(p as usize)) {
                         return Err(format!("grid {id}: primitive {p} lies beyond its reach"));
                     }
                     referenced[p as usize] = true;

@@ -76,6 +76,19 @@ pub(crate) fn precision_hint<T: Real>() -> &'static str {
     }
 }
 
+/// A failed `--accel auto` choice as one error, with the remedy where a
+/// probe ray starts beyond `T`'s range (a camera framed from beyond the
+/// `f32` limit): [`precision_hint`], as the pixels' errors have it.
+fn choose_failed<T: Real>(e: choose::ChooseError) -> anyhow::Error {
+    match e {
+        // A query error has no source: its message is the whole story.
+        choose::ChooseError::Query(QueryError::OriginOutOfRange { .. }) => {
+            anyhow::anyhow!("choosing the accelerator: {e}{}", precision_hint::<T>())
+        }
+        e => anyhow::Error::new(e).context("choosing the accelerator"),
+    }
+}
+
 /// Loads the scene named by a SCENE argument, reporting how long it took.
 pub(crate) fn load_scene(arg: &str) -> Result<Scene> {
     let start = Instant::now();
@@ -124,6 +137,49 @@ fn check_render_memory(args: &RenderArgs) -> Result<()> {
             args.width,
             args.height,
             needed as f64 / GIB,
+            args.memory_budget
+        );
+    }
+    Ok(())
+}
+
+/// Bytes a bench's generated rays take per primary pixel at their peak, in
+/// `f32` and `f64`: the three ray sets, the primary hits they are made
+/// from, the probe rays of `auto`, a `--write-rays` copy and the answers of
+/// the set being measured. Measured (`/usr/bin/time -f %M` of `render bench
+/// default --accel grid,auto --write-rays FILE --min-time 0.01` at 1024²
+/// and 2048², 2.53 rays a pixel): 245 and 404 bytes a pixel
+/// (276,504 → 1,028,816 KB in `f32`, 435,740 → 1,677,652 KB in `f64`),
+/// scaled to 3 rays a pixel (every primary ray hits a lit surface) and
+/// rounded up.
+pub const BENCH_BYTES_PER_PIXEL: [u64; 2] = [300, 480];
+
+/// Refuses, before any work, a bench whose generated rays
+/// ([`BENCH_BYTES_PER_PIXEL`] × pixels) would take more than
+/// `--memory-budget` (the scene and the structures come on top). A ray
+/// file's rays are bounded by the file, which the reader checks.
+///
+/// # Errors
+/// A message with the estimate and the budget.
+fn check_bench_memory(args: &BenchArgs) -> Result<()> {
+    const GIB: f64 = (1u64 << 30) as f64;
+    if args.rays.is_some() {
+        return Ok(());
+    }
+    let per_pixel = match args.precision {
+        Precision::F32 => BENCH_BYTES_PER_PIXEL[0],
+        Precision::F64 => BENCH_BYTES_PER_PIXEL[1],
+    };
+    let pixels = u64::from(args.width) * u64::from(args.height);
+    let needed = pixels.saturating_mul(per_pixel);
+    if needed as f64 > args.memory_budget * GIB {
+        bail!(
+            "--width {} × --height {} needs about {:.1} GiB for its rays in {} \
+             ({per_pixel} bytes a pixel), over the --memory-budget of {} GiB",
+            args.width,
+            args.height,
+            needed as f64 / GIB,
+            args.precision.name(),
             args.memory_budget
         );
     }
@@ -212,7 +268,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                     offset,
                 )
             })
-            .context("choosing the accelerator")?;
+            .map_err(choose_failed::<T>)?;
             println!("auto: {} ({})", choice.config, choice.reason);
             choice.accel
         }
@@ -318,6 +374,7 @@ fn report_trace<T: Real>(
 /// disagree on any answer (after the table and JSON are written).
 pub fn run_bench(args: &BenchArgs) -> Result<()> {
     cli::check_bench_totals(args).map_err(anyhow::Error::msg)?;
+    check_bench_memory(args)?;
     let named: Vec<AccelKind> = args.accel.iter().filter_map(|c| c.kind()).collect();
     let structures = if args.accel.is_empty() {
         AccelKind::ALL.to_vec()
@@ -427,8 +484,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 })
             })
             .collect();
-        let choice =
-            choose::choose(prims, total, |_| Ok(probe)).context("choosing the accelerator")?;
+        let choice = choose::choose(prims, total, |_| Ok(probe)).map_err(choose_failed::<T>)?;
         println!("auto: {} ({})", choice.config, choice.reason);
         if !configs.contains(&choice.config) {
             configs.push(choice.config);

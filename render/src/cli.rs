@@ -193,6 +193,12 @@ pub struct BenchArgs {
     /// Minimum seconds spent timing each figure (passes repeat until then).
     #[arg(long, default_value_t = 0.5, value_parser = min_time_parser, allow_negative_numbers = true)]
     pub min_time: f64,
+    /// Memory the generated ray sets may take, in GiB: a bench whose
+    /// estimate (bytes per primary pixel × pixels) is larger is refused,
+    /// with the figure, before any work. Rays read with `--rays` are
+    /// bounded by their file instead.
+    #[arg(long, value_name = "GIB", default_value_t = limits::MEMORY_BUDGET_GIB, value_parser = memory_budget_parser, allow_negative_numbers = true)]
+    pub memory_budget: f64,
     /// The speed-against-accuracy dials.
     #[command(flatten)]
     pub dials: DialArgs,
