@@ -150,22 +150,33 @@ pub trait Accelerator<T: Real>: Sync {
     fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError>;
 
     /// Whether any primitive is hit in `[t_min, t_max]`: shadow rays; stops at
-    /// the first hit found.
-    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError>;
+    /// the first hit found. By default `intersect(ray)?.is_some()`; a
+    /// structure overrides it with a walk that stops at the first hit.
+    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
+        Ok(self.intersect(ray)?.is_some())
+    }
 
-    /// [`Accelerator::intersect`] that also counts the work done.
+    /// [`Accelerator::intersect`] that also counts the work done. By default
+    /// it counts nothing.
     fn intersect_counted(
         &self,
         ray: &Ray<T>,
         counters: &mut TraversalCounters,
-    ) -> Result<Option<Hit<T>>, QueryError>;
+    ) -> Result<Option<Hit<T>>, QueryError> {
+        let _ = counters;
+        self.intersect(ray)
+    }
 
-    /// [`Accelerator::occluded`] that also counts the work done.
+    /// [`Accelerator::occluded`] that also counts the work done. By default
+    /// it counts nothing.
     fn occluded_counted(
         &self,
         ray: &Ray<T>,
         counters: &mut TraversalCounters,
-    ) -> Result<bool, QueryError>;
+    ) -> Result<bool, QueryError> {
+        let _ = counters;
+        self.occluded(ray)
+    }
 
     /// Every primitive that overlaps the closed box `region`, ascending and
     /// without repeats (an empty region gives none).
@@ -173,6 +184,49 @@ pub trait Accelerator<T: Real>: Sync {
 
     /// Build and shape statistics.
     fn stats(&self) -> AccelStats;
+}
+
+/// The four ray queries of an [`Accelerator`] impl (`intersect`, `occluded`
+/// and their counted twins), for a structure whose inherent methods
+/// `nearest(&self, ray, counter)` and `any(&self, ray, counter)` are generic
+/// over the [`CostCounter`]: the plain queries pass `()`, which counts
+/// nothing and compiles to nothing, the counted ones the
+/// [`TraversalCounters`]. Written once here instead of in every structure;
+/// use it inside `impl<T: Real, ...> Accelerator<T> for ...` (the impl's
+/// float type must be named `T`).
+#[macro_export]
+macro_rules! ray_queries_from_walks {
+    () => {
+        fn intersect(
+            &self,
+            ray: &$crate::Ray<T>,
+        ) -> ::core::result::Result<::core::option::Option<$crate::Hit<T>>, $crate::QueryError> {
+            self.nearest(ray, &mut ())
+        }
+
+        fn occluded(
+            &self,
+            ray: &$crate::Ray<T>,
+        ) -> ::core::result::Result<bool, $crate::QueryError> {
+            self.any(ray, &mut ())
+        }
+
+        fn intersect_counted(
+            &self,
+            ray: &$crate::Ray<T>,
+            counters: &mut $crate::TraversalCounters,
+        ) -> ::core::result::Result<::core::option::Option<$crate::Hit<T>>, $crate::QueryError> {
+            self.nearest(ray, counters)
+        }
+
+        fn occluded_counted(
+            &self,
+            ray: &$crate::Ray<T>,
+            counters: &mut $crate::TraversalCounters,
+        ) -> ::core::result::Result<bool, $crate::QueryError> {
+            self.any(ray, counters)
+        }
+    };
 }
 
 /// The box a structure gathers candidates from for a region query:
@@ -217,5 +271,68 @@ pub fn validate_region<T: Real>(region: &Aabb<T>) -> Result<(), QueryError> {
         Ok(())
     } else {
         Err(QueryError::NonFiniteRegion)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BruteForce, TriangleMesh, Vec3};
+
+    /// A user's structure implementing only what the trait requires, over
+    /// brute force's nearest hit.
+    struct Minimal<'a>(BruteForce<'a, f64, TriangleMesh<f64>>);
+
+    impl Accelerator<f64> for Minimal<'_> {
+        fn bounds(&self) -> Aabb<f64> {
+            self.0.bounds()
+        }
+        fn intersect(&self, ray: &Ray<f64>) -> Result<Option<Hit<f64>>, QueryError> {
+            self.0.intersect(ray)
+        }
+        fn query_region(&self, region: &Aabb<f64>) -> Result<Vec<u32>, QueryError> {
+            self.0.query_region(region)
+        }
+        fn stats(&self) -> AccelStats {
+            self.0.stats()
+        }
+    }
+
+    #[test]
+    fn the_default_queries_follow_intersect_and_count_nothing() {
+        let mesh = TriangleMesh::new(
+            vec![
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let minimal = Minimal(BruteForce::new(&mesh).unwrap());
+        let brute = BruteForce::new(&mesh).unwrap();
+        let up = Vec3::new(0.0, 0.0, 1.0);
+        for (origin, hits) in [
+            (Vec3::new(0.2, 0.2, 0.0), true),
+            (Vec3::new(0.8, 0.8, 0.0), false),
+        ] {
+            let ray = Ray::new(origin, up).unwrap();
+            let mut counters = TraversalCounters::default();
+            assert_eq!(minimal.occluded(&ray).unwrap(), hits);
+            assert_eq!(minimal.occluded_counted(&ray, &mut counters).unwrap(), hits);
+            assert_eq!(
+                minimal.intersect_counted(&ray, &mut counters).unwrap(),
+                brute.intersect(&ray).unwrap()
+            );
+            assert_eq!(counters, TraversalCounters::default());
+        }
+        // A bad ray is refused by the defaults as by `intersect`.
+        let bad = Ray {
+            origin: Vec3::new(f64::NAN, 0.0, 0.0),
+            direction: up,
+            t_min: 0.0,
+            t_max: 1.0,
+        };
+        assert!(minimal.occluded(&bad).is_err());
     }
 }

@@ -3,7 +3,7 @@
 use crate::accelerator::validate_region;
 use crate::{
     Aabb, AccelStats, Accelerator, BuildError, CostCounter, Hit, PreparedRay, PrimitiveSet,
-    QueryError, Ray, Real, TraversalCounters, bounds_union,
+    QueryError, Ray, Real, bounds_union,
 };
 use core::borrow::Borrow;
 use core::marker::PhantomData;
@@ -132,29 +132,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
         self.bounds
     }
 
-    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, &mut ())
-    }
-
-    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
-        self.any(ray, &mut ())
-    }
-
-    fn intersect_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, counters)
-    }
-
-    fn occluded_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<bool, QueryError> {
-        self.any(ray, counters)
-    }
+    crate::ray_queries_from_walks!();
 
     fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
         validate_region(region)?;

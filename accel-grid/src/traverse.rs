@@ -6,7 +6,7 @@ use accel_core::packed::for_each_candidate;
 use accel_core::parts::part_beam;
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
-    TraversalCounters, TraversalRay, nearer, region_matches, region_search_box, validate_region,
+    TraversalRay, nearer, region_matches, region_search_box, validate_region,
 };
 use core::borrow::Borrow;
 
@@ -253,29 +253,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
         }
     }
 
-    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, &mut ())
-    }
-
-    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
-        self.any(ray, &mut ())
-    }
-
-    fn intersect_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, counters)
-    }
-
-    fn occluded_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<bool, QueryError> {
-        self.any(ray, counters)
-    }
+    accel_core::ray_queries_from_walks!();
 
     /// Gathers the references of every cell near the region (grown by a
     /// rounding allowance, so that a primitive the exact test accepts is never

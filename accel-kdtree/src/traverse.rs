@@ -23,8 +23,7 @@ use crate::tree::KdTree;
 use accel_core::packed::{PackedTriangles, for_each_candidate};
 use accel_core::{
     Aabb, AccelStats, Accelerator, CostCounter, Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real,
-    TraversalCounters, TraversalRay, Vec3, nearer, region_matches, region_search_box,
-    validate_region,
+    TraversalRay, Vec3, nearer, region_matches, region_search_box, validate_region,
 };
 use core::borrow::Borrow;
 
@@ -383,29 +382,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
         self.bounds
     }
 
-    fn intersect(&self, ray: &Ray<T>) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, &mut ())
-    }
-
-    fn occluded(&self, ray: &Ray<T>) -> Result<bool, QueryError> {
-        self.any(ray, &mut ())
-    }
-
-    fn intersect_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<Option<Hit<T>>, QueryError> {
-        self.nearest(ray, counters)
-    }
-
-    fn occluded_counted(
-        &self,
-        ray: &Ray<T>,
-        counters: &mut TraversalCounters,
-    ) -> Result<bool, QueryError> {
-        self.any(ray, counters)
-    }
+    accel_core::ray_queries_from_walks!();
 
     /// Gathers the references of every leaf near the region, then keeps
     /// those the primitive's own overlap test accepts.
