@@ -344,17 +344,13 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
     };
     let n = items.map_or(prims.len(), <[u32]>::len);
     check_reference_estimate(&visitor, items, n, max_references)?;
-    let cells = match items {
-        Some(items) => {
-            CellLists::build_items(geometry.cell_count(), items, max_references, &visitor)?
-        }
-        None => CellLists::build(
-            geometry.cell_count(),
-            prims.len() as u32,
-            max_references,
-            &visitor,
-        )?,
-    };
+    let cells = CellLists::build_over(
+        geometry.cell_count(),
+        items,
+        prims.len() as u32,
+        max_references,
+        &visitor,
+    )?;
     let cells = if geometry.cell_count() >= OCCUPIED_BITS_MIN_CELLS {
         cells.with_occupied_bits()
     } else {

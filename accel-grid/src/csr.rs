@@ -89,6 +89,25 @@ impl CellLists {
         )
     }
 
+    /// [`CellLists::build_items`] for `Some(items)`, [`CellLists::build`]
+    /// for every item `0..item_count` when `None`: the lists of a grid over
+    /// some of a scene's primitives (a part, an octree's root) or all.
+    ///
+    /// # Errors
+    /// [`BuildError::BudgetExceeded`] as [`CellLists::build`].
+    pub fn build_over<V: CellVisitor>(
+        cell_count: usize,
+        items: Option<&[u32]>,
+        item_count: u32,
+        max_references: u64,
+        visitor: &V,
+    ) -> Result<Self, BuildError> {
+        match items {
+            Some(items) => Self::build_items(cell_count, items, max_references, visitor),
+            None => Self::build(cell_count, item_count, max_references, visitor),
+        }
+    }
+
     /// Lists with the given references per cell, in cell order, each kept as
     /// given (a structure that assembles its own cells, such as the octree
     /// joining its grids into one array, or that marks some cells specially).

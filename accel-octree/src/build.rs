@@ -272,17 +272,13 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 budget,
             });
         }
-        let lists = match items {
-            Some(items) => {
-                CellLists::build_items(geometry.cell_count(), items, max_references, &visitor)?
-            }
-            None => CellLists::build(
-                geometry.cell_count(),
-                prims.len() as u32,
-                max_references,
-                &visitor,
-            )?,
-        };
+        let lists = CellLists::build_over(
+            geometry.cell_count(),
+            items,
+            prims.len() as u32,
+            max_references,
+            &visitor,
+        )?;
         Ok((geometry, lists))
     };
     let (geometry, lists) = grid(rule)?;
