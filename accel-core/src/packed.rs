@@ -250,6 +250,26 @@ impl<T: Real> PackedTriangles<T> {
         })
     }
 
+    /// The bytes [`PackedTriangles::new`] adds for one list of `len`
+    /// references under `layout`: its blocks (lists of [`PACK_MIN`] or more)
+    /// and its entries of the list index. Zero for [`Layout::Indexed`]. Lets
+    /// a build count the packed layout against a memory budget before it
+    /// packs anything.
+    #[must_use]
+    pub const fn bytes_for_list(layout: Layout, len: usize) -> usize {
+        match layout {
+            Layout::Indexed => 0,
+            Layout::Packed => {
+                let blocks = if len >= PACK_MIN {
+                    len.div_ceil(LANES)
+                } else {
+                    0
+                };
+                blocks * size_of::<TriangleBlock<T>>() + len * size_of::<u32>()
+            }
+        }
+    }
+
     /// Bytes held (the blocks and the list index).
     #[must_use]
     pub fn memory_bytes(&self) -> usize {

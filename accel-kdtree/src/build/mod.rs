@@ -11,6 +11,7 @@ mod unstored;
 
 use crate::node::KdNode;
 use crate::params::KdTreeParams;
+use accel_core::packed::PackedTriangles;
 use accel_core::parts;
 use accel_core::{Aabb, AccelStats, BuildError, PrimitiveSet, Real, primitive_bounds};
 use binned::{BinnedNode, best_binned_split, split_binned};
@@ -128,6 +129,9 @@ pub(crate) struct Ctx<'p, T, P: ?Sized> {
     /// The scene's largest side, for [`parts::is_large`].
     scene_side: T,
     refs: AtomicU64,
+    /// Bytes of the nodes, references and blocks made so far
+    /// ([`KdTreeParams::max_bytes`]).
+    bytes: AtomicU64,
     failed: AtomicBool,
     _t: core::marker::PhantomData<T>,
 }
@@ -155,13 +159,54 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Ctx<'_, T, P> {
         prims.any(|p| parts::is_large(&self.prims.bounds(p as usize), self.scene_side))
     }
 
-    /// Counts a leaf's references against the budget.
+    /// Counts a leaf's references and bytes against the budgets (an empty
+    /// leaf is not stored, and a leaf of one keeps its primitive in the
+    /// node).
     fn count_leaf(&self, n: usize) {
+        // Past a budget, the open nodes close as leaves uncounted: the
+        // error reports the count that passed it.
+        if self.failed.load(Ordering::Relaxed) {
+            return;
+        }
         let total = self.refs.fetch_add(n as u64, Ordering::Relaxed) + n as u64;
         if total > self.params.max_references.min(u64::from(u32::MAX)) {
             self.failed.store(true, Ordering::Relaxed);
         }
+        let bytes = match n {
+            0 => 0,
+            1 => node_bytes::<T>(false),
+            _ => {
+                node_bytes::<T>(false)
+                    + n * size_of::<u32>()
+                    + PackedTriangles::<T>::bytes_for_list(self.params.layout, n)
+            }
+        };
+        self.count_bytes(bytes);
     }
+
+    /// Counts an inner node against the byte budget.
+    pub(crate) fn count_inner(&self) {
+        self.count_bytes(node_bytes::<T>(true));
+    }
+
+    /// Adds `n` bytes to the tree's count, failing the build past the budget.
+    fn count_bytes(&self, n: usize) {
+        let total = self.bytes.fetch_add(n as u64, Ordering::Relaxed) + n as u64;
+        if total > self.params.max_bytes {
+            self.failed.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The bytes one stored node takes: the node, its value of the reach table,
+/// and an inner node's split position in an `f64` tree's side table.
+fn node_bytes<T: Real>(inner: bool) -> usize {
+    let split = if inner && !inline_splits::<T>() {
+        size_of::<T>()
+    } else {
+        0
+    };
+    size_of::<KdNode>() + size_of::<T>() + split
 }
 
 /// The split a node should take, or `None` for a leaf (SAH termination).
@@ -184,7 +229,11 @@ fn choose<T: Real, P: PrimitiveSet<T> + ?Sized>(
             best_split(&sah, &node.events, n, planes)
         }
     }?;
-    (best.cost < sah.leaf_cost(n)).then_some(best)
+    let split = (best.cost < sah.leaf_cost(n)).then_some(best);
+    if split.is_some() {
+        ctx.count_inner();
+    }
+    split
 }
 
 /// Builds a subtree serially into `out`, reusing the lists of `spares`.
@@ -273,6 +322,7 @@ fn build_binned<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let Some(s) = split else {
         return build_piece(ctx, node.into_events());
     };
+    ctx.count_inner();
     let (below, above) = split_binned(node, &s, ctx.prims);
     let (below, above) = if n >= ctx.params.parallel_threshold {
         rayon::join(|| build_binned(ctx, below), || build_binned(ctx, above))
@@ -426,7 +476,11 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let whole = groups.len() == 1;
     let mut out = Out::new();
     let mut parts = Vec::with_capacity(groups.len());
-    let mut references = 0u64;
+    let least = least_bytes::<T>(prims.len(), params);
+    if least > params.max_bytes {
+        return Err(bytes_exceeded(least, params));
+    }
+    let (mut references, mut bytes) = (0u64, 0u64);
     let scene_side = (bounds.max - bounds.min).max_component();
     for parts::Group {
         prims: list,
@@ -446,11 +500,16 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
             depth_limit,
             scene_side,
             refs: AtomicU64::new(references),
+            bytes: AtomicU64::new(bytes),
             failed: AtomicBool::new(false),
             _t: core::marker::PhantomData,
         };
         let part = build_part(&ctx, list, part_boxes, part_bounds, naive)?;
         references = ctx.refs.load(Ordering::Relaxed);
+        bytes = ctx.bytes.load(Ordering::Relaxed);
+        if bytes > params.max_bytes {
+            return Err(bytes_exceeded(bytes, params));
+        }
         if ctx.failed.load(Ordering::Relaxed) {
             return Err(BuildError::BudgetExceeded {
                 what: "kd-tree references",
@@ -475,6 +534,27 @@ pub(crate) fn build<T: Real, P: PrimitiveSet<T> + ?Sized>(
         bounds,
         build_time: start.elapsed(),
     })
+}
+
+/// The least a tree over `n` primitives takes under `params`: one leaf
+/// referencing them all.
+fn least_bytes<T: Real>(n: usize, params: &KdTreeParams) -> u64 {
+    let refs = if n > 1 {
+        n * size_of::<u32>() + PackedTriangles::<T>::bytes_for_list(params.layout, n)
+    } else {
+        0
+    };
+    (node_bytes::<T>(false) + refs) as u64
+}
+
+/// The error of a tree past [`KdTreeParams::max_bytes`], `needed` being
+/// the bytes counted when the build stopped.
+fn bytes_exceeded(needed: u64, params: &KdTreeParams) -> BuildError {
+    BuildError::BudgetExceeded {
+        what: "kd-tree bytes (nodes, references, blocks; KdTreeParams::max_bytes)",
+        needed,
+        budget: params.max_bytes,
+    }
 }
 
 /// The tree of one part: `list` (ascending) with bounds `boxes` (in the same
