@@ -46,6 +46,7 @@ pub mod rayfile;
 pub mod report;
 pub mod scene;
 pub mod shade;
+pub mod shard;
 pub mod sweep;
 pub mod tiles;
 pub mod tradeoff;
