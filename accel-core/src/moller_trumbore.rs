@@ -32,6 +32,7 @@
 //! ```
 
 use crate::{Aabb, PreparedRay, PrimHit, PrimitiveSet, Real, TriangleMesh, Vec3};
+use core::borrow::Borrow;
 use core::fmt;
 
 /// Which ray–triangle test a mesh answers with.
@@ -159,62 +160,96 @@ fn consistent<T: Real>(
 /// ([`intersect_triangle_mt`]) instead of the watertight one. Bounds, box
 /// overlap and clipping are the mesh's own, so structures built over it have
 /// the same cells and nodes as over the mesh.
+///
+/// `M` holds the mesh: a borrow by default ([`MollerTrumboreMesh::new`]),
+/// or the mesh itself or an [`std::sync::Arc`] of it
+/// ([`MollerTrumboreMesh::owning`]), for an application that keeps the
+/// wrapper, and a structure sharing it, beside its own data.
 #[derive(Clone, Copy, Debug)]
-pub struct MollerTrumboreMesh<'a, T> {
-    mesh: &'a TriangleMesh<T>,
+pub struct MollerTrumboreMesh<'a, T, M = &'a TriangleMesh<T>> {
+    mesh: M,
+    _borrow: core::marker::PhantomData<&'a TriangleMesh<T>>,
 }
 
 impl<'a, T: Real> MollerTrumboreMesh<'a, T> {
-    /// Wraps a mesh (nothing is copied).
+    /// Wraps a borrowed mesh (nothing is copied).
     #[inline]
     #[must_use]
     pub const fn new(mesh: &'a TriangleMesh<T>) -> Self {
-        Self { mesh }
+        Self::owning(mesh)
+    }
+}
+
+impl<T: Real, M: Borrow<TriangleMesh<T>>> MollerTrumboreMesh<'_, T, M> {
+    /// Wraps whatever holds the mesh: the mesh itself, an `Arc` of it, or
+    /// a borrow (nothing is copied).
+    ///
+    /// ```
+    /// use accel_core::{Accelerator, BruteForce, MollerTrumboreMesh, TriangleMesh, Vec3};
+    /// use std::sync::Arc;
+    ///
+    /// let mesh = Arc::new(TriangleMesh::new(
+    ///     vec![Vec3::new(0.0f32, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0)],
+    ///     vec![[0, 1, 2]],
+    /// )?);
+    /// // Owns a count of the mesh, so both can live in one struct.
+    /// let fast = Arc::new(MollerTrumboreMesh::owning(Arc::clone(&mesh)));
+    /// let brute = BruteForce::shared(fast)?;
+    /// assert_eq!(brute.primitives().mesh().triangle_count(), 1);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[inline]
+    #[must_use]
+    pub const fn owning(mesh: M) -> Self {
+        Self {
+            mesh,
+            _borrow: core::marker::PhantomData,
+        }
     }
 
     /// The wrapped mesh.
     #[inline]
     #[must_use]
-    pub const fn mesh(&self) -> &'a TriangleMesh<T> {
-        self.mesh
+    pub fn mesh(&self) -> &TriangleMesh<T> {
+        self.mesh.borrow()
     }
 }
 
-impl<T: Real> PrimitiveSet<T> for MollerTrumboreMesh<'_, T> {
+impl<T: Real, M: Borrow<TriangleMesh<T>> + Sync> PrimitiveSet<T> for MollerTrumboreMesh<'_, T, M> {
     #[inline]
     fn len(&self) -> usize {
-        self.mesh.triangle_count()
+        self.mesh().triangle_count()
     }
 
     #[inline]
     fn bounds(&self, i: usize) -> Aabb<T> {
-        PrimitiveSet::bounds(self.mesh, i)
+        PrimitiveSet::bounds(self.mesh(), i)
     }
 
     #[inline]
     fn intersect(&self, i: usize, ray: &PreparedRay<T>, t_max: T) -> Option<PrimHit<T>> {
-        let [a, b, c] = self.mesh.triangle(i);
+        let [a, b, c] = self.mesh().triangle(i);
         intersect_triangle_mt(ray, a, b, c, t_max)
     }
 
     #[inline]
     fn overlaps_box(&self, i: usize, b: &Aabb<T>) -> bool {
-        self.mesh.overlaps_box(i, b)
+        self.mesh().overlaps_box(i, b)
     }
 
     #[inline]
     fn overlaps_boxes(&self, i: usize, boxes: &[Aabb<T>], out: &mut [bool]) {
-        self.mesh.overlaps_boxes(i, boxes, out);
+        self.mesh().overlaps_boxes(i, boxes, out);
     }
 
     #[inline]
     fn clipped_bounds(&self, i: usize, b: &Aabb<T>) -> Aabb<T> {
-        self.mesh.clipped_bounds(i, b)
+        self.mesh().clipped_bounds(i, b)
     }
 
     #[inline]
     fn clipped_bounds_split(&self, i: usize, b: &Aabb<T>, axis: usize, s: T) -> [Aabb<T>; 2] {
-        self.mesh.clipped_bounds_split(i, b, axis, s)
+        self.mesh().clipped_bounds_split(i, b, axis, s)
     }
 }
 

@@ -11,8 +11,8 @@
 
 use accel_core::packed::Layout;
 use accel_core::{
-    AccelStats, Accelerator, BruteForce, PrimitiveSet, Ray, Real, SharedBruteForce,
-    TraversalCounters, TriangleMesh, Vec3,
+    AccelStats, Accelerator, BruteForce, MollerTrumboreMesh, PrimitiveSet, Ray, Real,
+    SharedBruteForce, TraversalCounters, TriangleMesh, Vec3,
 };
 use accel_grid::{Grid, SharedGrid};
 use accel_kdtree::{KdTree, KdTreeParams, SharedKdTree};
@@ -269,4 +269,40 @@ fn a_world_holding_mesh_and_structures_is_returned_and_queried_on_another_thread
     let shared = grid.primitives() as *const TriangleMesh<f32>;
     drop((brute, octree, kdtree));
     assert_eq!(grid.primitives() as *const _, shared);
+}
+
+/// The fast triangle test's wrapper owns its mesh too, so a structure over
+/// it can be kept beside the mesh (issue 32's note: it only borrowed).
+type OwnedFast = MollerTrumboreMesh<'static, f32, Arc<TriangleMesh<f32>>>;
+
+/// A mesh and a kD-tree over its Möller–Trumbore wrapper, built and
+/// returned together.
+fn load_fast() -> (Arc<TriangleMesh<f32>>, SharedKdTree<f32, OwnedFast>) {
+    let mesh = accel_core::scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
+        .cast::<f32>()
+        .expect("an f32 torus");
+    let mesh = Arc::new(mesh);
+    let fast = Arc::new(MollerTrumboreMesh::owning(Arc::clone(&mesh)));
+    (mesh, KdTree::shared(fast).expect("kd-tree"))
+}
+
+#[test]
+fn an_owned_fast_test_wrapper_answers_as_the_borrowing_one() {
+    let (mesh, tree) = load_fast();
+    assert!(std::ptr::eq(tree.primitives().mesh(), &*mesh));
+    let borrowed = MollerTrumboreMesh::new(&*mesh);
+    let brute = BruteForce::new(&borrowed).unwrap();
+    let rays = accel_core::scenes::random_rays::<f32>(&mesh.bounds().cast(), 2000, 11);
+    let mut hits = 0;
+    for ray in &rays {
+        let want = brute.intersect(ray).unwrap();
+        hits += usize::from(want.is_some());
+        assert_eq!(
+            tree.intersect(ray).unwrap().map(|h| h.bit_key()),
+            want.map(|h| h.bit_key()),
+            "{ray:?}"
+        );
+    }
+    // Premise: the rays meet the torus often enough to compare hits.
+    assert!(hits > 200, "{hits} hits");
 }
