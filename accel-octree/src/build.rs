@@ -278,7 +278,17 @@ fn root<T: Real, P: PrimitiveSet<T> + ?Sized>(
             prims.len() as u32,
             max_references,
             &visitor,
-        )?;
+        )
+        .map_err(|e| match e {
+            // In the unit of the octree's budget, bytes, as every other
+            // refusal of the octree's build.
+            BuildError::BudgetExceeded { needed, .. } => BuildError::BudgetExceeded {
+                what: "octree bytes (the root grid's cell references)",
+                needed: bytes.saturating_add(needed.saturating_mul(4)),
+                budget,
+            },
+            e => e,
+        })?;
         Ok((geometry, lists))
     };
     let (geometry, lists) = grid(rule)?;

@@ -54,8 +54,16 @@ fn a_small_scene_over_the_budget_is_refused_by_the_exact_build() {
         ..OctreeParams::default()
     };
     match Octree::with_params(&mesh, &params).map(|_| ()).unwrap_err() {
-        BuildError::BudgetExceeded { what, .. } => {
+        BuildError::BudgetExceeded {
+            what,
+            needed,
+            budget,
+        } => {
             assert!(!what.contains("estimated"), "{what}");
+            // In the budget's own unit, bytes, like every octree refusal.
+            assert!(what.starts_with("octree bytes"), "{what}");
+            assert_eq!(budget, 64 << 10);
+            assert!(needed > budget, "{needed}");
         }
         e => panic!("expected BudgetExceeded, got {e:?}"),
     }
@@ -76,4 +84,37 @@ fn the_same_scene_builds_within_the_default_budget() {
         key(brute.intersect(&ray).unwrap())
     );
     assert!(octree.intersect(&ray).unwrap().is_some());
+}
+
+/// Whatever stage refuses (the root's resolution, its estimate, its exact
+/// cell lists, the nested grids), the refusal is counted in bytes against
+/// the `max_bytes` given, never in cells or references against a budget
+/// the user did not set.
+#[test]
+fn every_refusal_is_in_bytes_of_the_budget_given() {
+    let mesh = copies(1_000);
+    let mut refused = 0;
+    for shift in 8..24 {
+        let max_bytes = 1u64 << shift;
+        let params = OctreeParams {
+            max_bytes,
+            ..OctreeParams::default()
+        };
+        match Octree::with_params(&mesh, &params) {
+            Ok(_) => {}
+            Err(BuildError::BudgetExceeded {
+                what,
+                needed,
+                budget,
+            }) => {
+                refused += 1;
+                assert!(what.starts_with("octree bytes"), "{max_bytes}: {what}");
+                assert_eq!(budget, max_bytes);
+                assert!(needed > budget, "{what}: {needed} of {budget}");
+            }
+            Err(e) => panic!("{max_bytes}: {e:?}"),
+        }
+    }
+    // Premise: the small budgets were refused, the large ones were not.
+    assert!((1..16).contains(&refused), "{refused} of 16 refused");
 }
