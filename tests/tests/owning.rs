@@ -212,7 +212,7 @@ struct World {
 /// Loads the world: the mesh is made here and leaves with the structures
 /// (with borrowing structures, this function could not be written).
 fn load() -> World {
-    let mesh = accel_core::scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
+    let mesh = accel_scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
         .cast::<f32>()
         .expect("an f32 torus");
     let mesh = Arc::new(mesh);
