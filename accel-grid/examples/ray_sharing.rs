@@ -17,7 +17,7 @@
 use accel_core::{Accelerator, Ray, TraversalRay};
 use accel_grid::Grid;
 use accel_grid::dda::{BeamWalk, Step};
-use accel_scenes::gltf as gltf_scene;
+use accel_scenes::gltf;
 use accel_scenes::{Camera, GeneratedScene};
 use std::collections::HashSet;
 
@@ -34,7 +34,7 @@ fn main() {
     let (mesh, camera) = if let Some(scene) = GeneratedScene::from_name(&name) {
         (scene.mesh(), scene.camera())
     } else {
-        let mesh = gltf_scene::load(std::path::Path::new(&name))
+        let mesh = gltf::load(std::path::Path::new(&name))
             .unwrap_or_else(|e| {
                 eprintln!("{name}: {e}");
                 std::process::exit(2);

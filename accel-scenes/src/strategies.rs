@@ -106,9 +106,14 @@ pub fn lattice_vertex() -> impl Strategy<Value = [i8; 3]> + Clone {
     prop::array::uniform3(-4i8..=4)
 }
 
+/// A lattice triangle.
+pub fn lattice_tri() -> impl Strategy<Value = LatticeTri> + Clone {
+    prop::array::uniform3(lattice_vertex())
+}
+
 /// `n` lattice triangles.
 pub fn lattice_tris(n: Range<usize>) -> impl Strategy<Value = Vec<LatticeTri>> {
-    prop::collection::vec(prop::array::uniform3(lattice_vertex()), n)
+    prop::collection::vec(lattice_tri(), n)
 }
 
 /// A lattice triangle, or (as often) one flat in an axis plane: one
@@ -122,8 +127,7 @@ pub fn lattice_or_flat_tri() -> impl Strategy<Value = LatticeTri> {
             }
             t
         });
-    let any_triangle = prop::array::uniform3(lattice_vertex());
-    prop_oneof![any_triangle, flat_triangle]
+    prop_oneof![lattice_tri(), flat_triangle]
 }
 
 /// [`SceneSpec::Lattice`] of the triangles `tris` draws, under one of
