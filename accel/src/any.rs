@@ -54,6 +54,14 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> AnyAccelerator<'
         }
     }
 
+    /// The structure inside, as a trait object: one virtual call per query
+    /// straight to the structure's own code, no match on the variant (for
+    /// code that takes `&dyn Accelerator`, such as a benchmark loop).
+    #[must_use]
+    pub fn as_dyn(&self) -> &(dyn Accelerator<T> + '_) {
+        each!(self, a => a)
+    }
+
     /// The primitives it indexes.
     #[must_use]
     pub fn primitives(&self) -> &P {
@@ -72,6 +80,20 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> AnyAccelerator<'
             Self::KdTree(a) => a.validate(),
             Self::Brute(_) => Ok(()),
         }
+    }
+}
+
+impl<'a, T, P, S> AnyAccelerator<'a, T, P, S>
+where
+    T: Real + 'a,
+    P: PrimitiveSet<T> + ?Sized + 'a,
+    S: Borrow<P> + Sync + 'a,
+{
+    /// The structure inside, boxed as a trait object ([`Self::as_dyn`],
+    /// owned).
+    #[must_use]
+    pub fn into_dyn(self) -> Box<dyn Accelerator<T> + 'a> {
+        each!(self, a => Box::new(a))
     }
 }
 

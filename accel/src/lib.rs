@@ -88,3 +88,8 @@ pub use {accel_core, accel_grid, accel_kdtree, accel_octree};
 /// loading, the ray file, rays aimed at shared edges (the `accel-scenes`
 /// crate).
 pub use accel_scenes as scenes;
+
+/// The guide's library example, compiled and run with the crate's tests.
+#[cfg(doctest)]
+#[doc = include_str!("../../docs/guide.md")]
+struct GuideDoctests;

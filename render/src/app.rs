@@ -284,7 +284,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     );
     let (w, h) = (args.width, args.height);
     let shader = Shader {
-        accel: &accel,
+        accel: accel.as_dyn(),
         mesh,
         scene,
         width: w,
@@ -311,7 +311,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     for p in &pixels {
         tally.add(&p.tally);
     }
-    report_trace(&tally, elapsed, w, h, args, &accel);
+    report_trace(&tally, elapsed, w, h, args, accel.as_dyn());
     let rgb: Vec<u8> = pixels
         .iter()
         .flat_map(|p: &Pixel| p.rgb.map(to_srgb8))
@@ -463,7 +463,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         None => {
             let generator = accel::build(bench::RAY_GENERATOR, prims)?;
             let sets = bench::generate_rays_from(
-                &generator,
+                generator.as_dyn(),
                 mesh,
                 &scene.view,
                 args.width,

@@ -563,7 +563,7 @@ pub fn measure_accel<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let stats = accel.stats();
     let sets = sets
         .iter()
-        .map(|set| measure_set(&accel, kind.name(), set, min_time))
+        .map(|set| measure_set(accel.as_dyn(), kind.name(), set, min_time))
         .collect::<Result<_, _>>()?;
     Ok(AccelResult {
         accel: kind.name(),

@@ -117,7 +117,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         let sets = pool.install(|| -> Result<Vec<RaySet<f32>>> {
             let generator = accel::build(bench::RAY_GENERATOR, &mesh)?;
             Ok(bench::generate_rays_from(
-                &generator,
+                generator.as_dyn(),
                 &mesh,
                 &scene.view,
                 args.width,
@@ -193,13 +193,13 @@ fn sweep_one<T: Real>(
     for (i, set) in sets.iter().enumerate() {
         // One untimed pass first: caches and clocks warm up.
         std::hint::black_box(
-            bench::count_hits(&grid, set.kind.any_hit(), &set.rays, true)
+            bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
                 .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?,
         );
         let mut times = Vec::new();
         for _ in 0..repeats {
             let t = Instant::now();
-            let hits = bench::count_hits(&grid, set.kind.any_hit(), &set.rays, true)
+            let hits = bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
                 .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?;
             std::hint::black_box(hits);
             times.push(t.elapsed().as_secs_f64());

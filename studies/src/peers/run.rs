@@ -361,7 +361,7 @@ fn build_all<'m>(
             let accel = accel::build_config(&AccelConfig::default_for(kind), mesh)?;
             record(kind.name(), true, start.elapsed());
             if first {
-                tools.push(Tool::Ours(kind, Box::new(accel)));
+                tools.push(Tool::Ours(kind, accel.into_dyn()));
             }
         }
         for PeerKind {

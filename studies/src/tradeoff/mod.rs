@@ -304,7 +304,7 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         }
     }
     let accel = accel.expect("at least one build");
-    let accel: &dyn Accelerator<T> = &accel;
+    let accel = accel.as_dyn();
     let offset = match s.spawn {
         Spawn::ErrorBound => SpawnOffset::ErrorBound,
         Spawn::Fixed(e) => SpawnOffset::Fixed(T::from_f64(e)),
