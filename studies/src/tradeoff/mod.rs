@@ -13,7 +13,7 @@
 //!   kD-tree, which is bit-for-bit equal to brute force (the workspace's
 //!   central invariant, checked by the test suites);
 //! - **leaks**: of `--leak-rays` rays aimed from outside at shared edges and
-//!   vertices of the scene's closed parts ([`leaks`]), the share that hit
+//!   vertices of the scene's closed parts ([`accel_scenes::aimed`]), the share that hit
 //!   nothing;
 //! - **self-hits**: of the shadow and diffuse (ambient-occlusion) rays, the
 //!   share whose nearest hit is the triangle they leave.
