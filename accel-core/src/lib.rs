@@ -69,8 +69,9 @@
 //! re-exported as [`glam`]; vectors of any other glam version convert
 //! through arrays (`Vec3::from(v.to_array())`, `<[f32; 3]>::from(w)`).
 //!
-//! With the `scenes` feature, [`scenes`] generates the workspace's benchmark
-//! scenes and rays; with `gltf`, [`gltf_scene`] loads glTF 2.0 files.
+//! Scenes (generated meshes and rays, the camera, glTF loading, the ray
+//! file) live in the `accel-scenes` crate; the `accel` crate puts every
+//! structure and the chooser behind one dependency.
 //!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};
@@ -107,16 +108,11 @@ pub mod triangle;
 mod triangle_box;
 mod vec3;
 
-#[cfg(feature = "gltf")]
-pub mod gltf_scene;
-
 /// The glam version [`Vec3`]'s `From` conversions are written for (0.34):
 /// use it to name those types without depending on glam yourself. With a
 /// different glam version, convert through arrays (`[T; 3]`), which every
 /// version supports, since `From` holds for one version's types only.
 pub use glam;
-#[cfg(feature = "scenes")]
-pub mod scenes;
 
 pub use aabb::Aabb;
 pub use accelerator::{

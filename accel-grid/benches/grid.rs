@@ -5,10 +5,10 @@
 //! `cargo bench -p accel-grid` runs everything; criterion's filter narrows it,
 //! e.g. `cargo bench -p accel-grid -- terrain_1m/build`.
 
-use accel_core::gltf_scene::{load, shared_scene_files};
-use accel_core::scenes::{Camera, GeneratedScene, random_rays};
 use accel_core::{Accelerator, Ray, TriangleMesh, Vec3};
 use accel_grid::Grid;
+use accel_scenes::gltf::{load, shared_scene_files};
+use accel_scenes::{Camera, GeneratedScene, random_rays};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -38,7 +38,11 @@ fn scenes() -> Vec<BenchScene> {
         let Ok(mesh) = scene.mesh.cast() else {
             continue;
         };
-        let camera = Camera::frame(&scene.mesh.bounds(), Vec3::new(0.3, -1.0, 0.4));
+        let camera = Camera::frame(
+            &scene.mesh.bounds(),
+            Vec3::new(0.3, -1.0, 0.4),
+            accel_scenes::Z_UP,
+        );
         let name = path
             .file_stem()
             .map_or_else(String::new, |s| s.to_string_lossy().into_owned());

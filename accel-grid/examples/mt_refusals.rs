@@ -7,9 +7,9 @@
 //! `cargo run --release -p accel-grid --example mt_refusals`.
 
 use accel_core::moller_trumbore::intersect_triangle_mt;
-use accel_core::scenes::{GeneratedScene, random_rays};
 use accel_core::{Accelerator, PreparedRay, Ray, Real, TriangleMesh};
 use accel_grid::Grid;
+use accel_scenes::{GeneratedScene, random_rays};
 
 fn refusals<T: Real>(mesh: &TriangleMesh<T>, rays: &[Ray<T>], label: &str) {
     let grid = Grid::new(mesh).expect("grid builds");

@@ -14,10 +14,11 @@
 //! sphere_100k) or a glTF file, framed from `Camera::DEFAULT_SIDE`;
 //! 512×512 camera rays.
 
-use accel_core::scenes::{Camera, GeneratedScene};
-use accel_core::{Accelerator, Ray, TraversalRay, gltf_scene};
+use accel_core::{Accelerator, Ray, TraversalRay};
 use accel_grid::Grid;
 use accel_grid::dda::{BeamWalk, Step};
+use accel_scenes::gltf;
+use accel_scenes::{Camera, GeneratedScene};
 use std::collections::HashSet;
 
 /// Side of the camera image, in rays.
@@ -33,13 +34,13 @@ fn main() {
     let (mesh, camera) = if let Some(scene) = GeneratedScene::from_name(&name) {
         (scene.mesh(), scene.camera())
     } else {
-        let mesh = gltf_scene::load(std::path::Path::new(&name))
+        let mesh = gltf::load(std::path::Path::new(&name))
             .unwrap_or_else(|e| {
                 eprintln!("{name}: {e}");
                 std::process::exit(2);
             })
             .mesh;
-        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE);
+        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE, accel_scenes::Z_UP);
         (mesh, camera)
     };
     let mesh = mesh.cast::<f32>().expect("the scene fits f32");

@@ -6,11 +6,11 @@
 //! soup_100k, terrain_1m, teapot_in_stadium (default sphere_100k).
 
 use accel_core::Accelerator;
-use accel_core::scenes::driver::TraceDriver;
 use accel_grid::Grid;
+use accel_scenes::TraceDriver;
 
 fn main() {
-    let run = TraceDriver::from_args("sphere_100k").unwrap_or_else(|e| {
+    let run = TraceDriver::from_args(std::env::args().skip(1), "sphere_100k").unwrap_or_else(|e| {
         eprintln!("{e}");
         std::process::exit(2);
     });

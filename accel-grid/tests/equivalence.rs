@@ -2,145 +2,34 @@
 //! adversarial rays, several densities, in f32 and f64. (The workspace-wide
 //! suites in the `tests` crate go further; this one guards the grid itself.)
 
-use accel_core::scenes::{terrain, torus, uv_sphere};
 use accel_core::{Accelerator, BruteForce, Ray, Real, TraversalCounters, TriangleMesh, Vec3};
 use accel_grid::{Grid, GridParams};
+use accel_scenes::strategies::{
+    self, RaySpec, SceneSpec, agrees, at_vertex_ray, from_vertex_ray, lattice_scene, lattice_tris,
+    mesh_scene, random_ray, soup_scene, window,
+};
+use accel_scenes::uv_sphere;
 use proptest::prelude::*;
 
-/// A scene description, kept small so that failures shrink to something readable.
-#[derive(Clone, Debug)]
-enum SceneSpec {
-    /// Triangles with vertices on a coarse lattice (many exact coincidences
-    /// with cell boundaries), scaled and offset.
-    Lattice(Vec<[[i8; 3]; 3]>, f64, f64),
-    /// Free random triangles in the unit cube.
-    Soup(Vec<[[f64; 3]; 3]>),
-    /// A closed mesh: 0 sphere, 1 torus, 2 terrain; scale and offset.
-    Mesh(u8, f64, f64),
-}
-
-impl SceneSpec {
-    fn mesh(&self) -> TriangleMesh<f64> {
-        match self {
-            Self::Lattice(tris, scale, offset) => {
-                let t: Vec<[Vec3<f64>; 3]> = tris
-                    .iter()
-                    .map(|t| {
-                        t.map(|v| {
-                            Vec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])) * *scale
-                                + Vec3::splat(*offset)
-                        })
-                    })
-                    .collect();
-                TriangleMesh::from_triangles(&t).unwrap()
-            }
-            Self::Soup(tris) => {
-                let t: Vec<[Vec3<f64>; 3]> = tris.iter().map(|t| t.map(Vec3::from)).collect();
-                TriangleMesh::from_triangles(&t).unwrap()
-            }
-            Self::Mesh(kind, scale, offset) => {
-                let m = match kind {
-                    0 => uv_sphere(Vec3::ZERO, 1.0, 200),
-                    1 => torus(Vec3::ZERO, 1.0, 0.4, 12, 8),
-                    _ => terrain(300, 3),
-                };
-                let p = m
-                    .positions()
-                    .iter()
-                    .map(|&p| p * *scale + Vec3::splat(*offset))
-                    .collect();
-                TriangleMesh::new(p, m.indices().to_vec()).unwrap()
-            }
-        }
-    }
-}
-
 fn scene_strategy() -> impl Strategy<Value = SceneSpec> {
-    let lattice_vertex = prop::array::uniform3(-4i8..=4);
-    let lattice = (
-        prop::collection::vec(prop::array::uniform3(lattice_vertex), 1..24),
-        prop::sample::select(vec![1.0, 0.25, 1e-3, 1e3]),
-        prop::sample::select(vec![0.0, -3.5, 100.0]),
-    )
-        .prop_map(|(t, s, o)| SceneSpec::Lattice(t, s, o));
-    let soup = prop::collection::vec(
-        prop::array::uniform3(prop::array::uniform3(0.0..1.0f64)),
-        1..40,
-    )
-    .prop_map(SceneSpec::Soup);
-    let mesh = (
-        0u8..3,
-        prop::sample::select(vec![1.0, 0.01, 50.0]),
-        prop::sample::select(vec![0.0, 7.0]),
-    )
-        .prop_map(|(k, s, o)| SceneSpec::Mesh(k, s, o));
-    prop_oneof![lattice, soup, mesh]
-}
-
-/// How a ray is aimed, relative to the scene's bounds and vertices.
-#[derive(Clone, Debug)]
-enum RaySpec {
-    /// Origin in the grown bounds (unit coordinates), any direction, some
-    /// components forced to +0 or -0.
-    Random([f64; 3], [f64; 3], [u8; 3]),
-    /// From a random point toward vertex `v` (index modulo the count), or the
-    /// midpoint of an edge when `edge` is set.
-    AtVertex([f64; 3], usize, bool),
-    /// Starting on a vertex of the scene, in a random direction.
-    FromVertex(usize, [f64; 3]),
-}
-
-fn ray_strategy() -> impl Strategy<Value = RaySpec> {
-    let unit3 = prop::array::uniform3(-0.25..1.25f64);
-    let dir3 = prop::array::uniform3(-1.0..1.0f64);
     prop_oneof![
-        (unit3.clone(), dir3.clone(), prop::array::uniform3(0u8..6))
-            .prop_map(|(o, d, z)| RaySpec::Random(o, d, z)),
-        (unit3, any::<usize>(), any::<bool>()).prop_map(|(o, v, e)| RaySpec::AtVertex(o, v, e)),
-        (any::<usize>(), dir3).prop_map(|(v, d)| RaySpec::FromVertex(v, d)),
+        lattice_scene(
+            lattice_tris(1..24),
+            vec![1.0, 0.25, 1e-3, 1e3],
+            vec![0.0, -3.5, 100.0]
+        ),
+        soup_scene(1..40),
+        mesh_scene(0..3),
     ]
 }
 
-fn make_ray<T: Real>(
-    spec: &RaySpec,
-    mesh: &TriangleMesh<T>,
-    t_window: (f64, f64),
-) -> Option<Ray<T>> {
-    let b = mesh.bounds();
-    let lerp = |u: [f64; 3]| {
-        Vec3::new(
-            b.min.x + (b.max.x - b.min.x) * T::from_f64(u[0]),
-            b.min.y + (b.max.y - b.min.y) * T::from_f64(u[1]),
-            b.min.z + (b.max.z - b.min.z) * T::from_f64(u[2]),
-        )
-    };
-    let vertex = |i: usize| mesh.positions()[i % mesh.positions().len()];
-    let (origin, dir) = match spec {
-        RaySpec::Random(o, d, zero) => {
-            let mut d = Vec3::from(d.map(T::from_f64));
-            for a in 0..3 {
-                match zero[a] {
-                    0 => d[a] = T::ZERO,
-                    1 => d[a] = -T::ZERO,
-                    _ => {}
-                }
-            }
-            (lerp(*o), d)
-        }
-        RaySpec::AtVertex(o, v, edge) => {
-            let target = if *edge {
-                let t = mesh.indices()[v % mesh.indices().len()];
-                (mesh.positions()[t[0] as usize] + mesh.positions()[t[1] as usize]) * T::HALF
-            } else {
-                vertex(*v)
-            };
-            let origin = lerp(*o);
-            (origin, target - origin)
-        }
-        RaySpec::FromVertex(v, d) => (vertex(*v), Vec3::from(d.map(T::from_f64))),
-    };
-    let (t_min, t_max) = (T::from_f64(t_window.0), T::from_f64(t_window.1));
-    Ray::with_interval(origin, dir, t_min, t_max).ok()
+fn ray_strategy() -> impl Strategy<Value = RaySpec> {
+    prop_oneof![random_ray(), at_vertex_ray(), from_vertex_ray()]
+}
+
+/// The ray `spec` describes (no lattice rays here).
+fn make_ray<T: Real>(spec: &RaySpec, mesh: &TriangleMesh<T>, window: (f64, f64)) -> Option<Ray<T>> {
+    strategies::make_ray(spec, mesh, (0.25, 0.0), window)
 }
 
 fn check<T: Real>(
@@ -162,21 +51,13 @@ fn check<T: Real>(
     Ok(())
 }
 
-fn window_strategy() -> impl Strategy<Value = (f64, f64)> {
-    prop_oneof![
-        3 => Just((0.0, f64::INFINITY)),
-        1 => (0.0..2.0f64, 0.0..3.0f64),
-        1 => Just((1e-4, f64::INFINITY)),
-    ]
-}
-
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     #[test]
     fn grid_equals_brute_force(
         scene in scene_strategy(),
-        rays in prop::collection::vec((ray_strategy(), window_strategy()), 1..48),
+        rays in prop::collection::vec((ray_strategy(), window(false)), 1..48),
         density in prop::sample::select(vec![0.5, 1.0, 2.0, 4.0]),
     ) {
         check::<f32>(&scene, &rays, density)?;
@@ -197,7 +78,7 @@ proptest! {
         kind in 0u8..2,
         scale in prop::sample::select(vec![1.0, 0.01, 50.0]),
         offset in prop::sample::select(vec![0.0, 7.0]),
-        rays in prop::collection::vec((ray_strategy(), window_strategy()), 1..64),
+        rays in prop::collection::vec((ray_strategy(), window(false)), 1..64),
     ) {
         let scene = SceneSpec::Mesh(kind, scale, offset);
         let mesh = scene.mesh();
@@ -265,36 +146,6 @@ fn block_plane_ray<T: Real>(
     Ray::new(o, d).ok()
 }
 
-/// Whether `grid` answers `ray` as `brute` does, nearest and any hit.
-fn agrees<T: Real>(
-    grid: &Grid<'_, T, TriangleMesh<T>>,
-    brute: &BruteForce<'_, T, TriangleMesh<T>>,
-    ray: &Ray<T>,
-    what: &str,
-) -> Result<(), TestCaseError> {
-    let want = brute.intersect(ray).unwrap();
-    let got = grid.intersect(ray).unwrap();
-    prop_assert_eq!(
-        got.map(|h| h.bit_key()),
-        want.map(|h| h.bit_key()),
-        "{} {}: ray {:?}: grid {:?} brute {:?}",
-        T::NAME,
-        what,
-        ray,
-        got,
-        want
-    );
-    prop_assert_eq!(
-        grid.occluded(ray).unwrap(),
-        want.is_some(),
-        "{} {} occluded, ray {:?}",
-        T::NAME,
-        what,
-        ray
-    );
-    Ok(())
-}
-
 type SnapSpec = ([f64; 3], usize, [f64; 3], [u8; 3]);
 
 /// [`grid_with_blocks_equals_brute_force`] in precision `T`.
@@ -340,7 +191,7 @@ proptest! {
     fn grid_with_blocks_equals_brute_force(
         centres in prop::collection::vec(prop::array::uniform3(0.05..0.95f64), 1..5),
         radius in prop::sample::select(vec![0.01, 0.04]),
-        rays in prop::collection::vec((ray_strategy(), window_strategy()), 1..64),
+        rays in prop::collection::vec((ray_strategy(), window(false)), 1..64),
         snapped in prop::collection::vec(
             (
                 prop::array::uniform3(0.0..1.0f64),

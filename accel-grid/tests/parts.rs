@@ -1,11 +1,11 @@
 //! A grid in parts: a small dense part in a large sparse scene, and a floor,
 //! each get a uniform grid of their own; the answers stay brute force's.
 
-use accel_core::scenes::{
-    FlatFieldSpec, flat_field, random_rays, rays_leaving_the_floor, teapot_in_stadium,
-};
 use accel_core::{Aabb, Accelerator, BruteForce, Real, TraversalCounters, TriangleMesh, Vec3};
 use accel_grid::{Grid, GridParams};
+use accel_scenes::{
+    FlatFieldSpec, flat_field, random_rays, rays_leaving_the_floor, teapot_in_stadium,
+};
 
 /// The seed's single grid over the same scene.
 fn one_part<T: Real>() -> GridParams<T> {

@@ -7,15 +7,15 @@
 //! the preset's, `THREADS=n` builds on `n` threads.
 
 use accel_core::Accelerator;
-use accel_core::scenes::{GeneratedScene, terrain};
 use accel_kdtree::{KdTree, KdTreeParams};
+use accel_scenes::{GeneratedScene, terrain};
 
 fn main() {
     let first = std::env::args().nth(1).unwrap_or_else(|| "100000".into());
     let mesh = match (first.parse::<usize>(), GeneratedScene::from_name(&first)) {
         (Ok(n), _) => terrain(n, 0x7E),
         (Err(_), Some(scene)) => scene.mesh(),
-        (Err(_), None) => match accel_core::gltf_scene::load(std::path::Path::new(&first)) {
+        (Err(_), None) => match accel_scenes::gltf::load(std::path::Path::new(&first)) {
             Ok(scene) => scene.mesh,
             Err(e) => {
                 eprintln!("{first}: {e}");

@@ -27,7 +27,7 @@ impl App {
     /// Makes the mesh (a torus, standing in for a loaded file) and the tree
     /// over it, and returns both together.
     fn load() -> Result<Self, BuildError> {
-        let mesh = accel_core::scenes::torus(Vec3::ZERO, 1.0, 0.25, 48, 24)
+        let mesh = accel_scenes::torus(Vec3::ZERO, 1.0, 0.25, 48, 24)
             .cast::<f32>()
             .expect("the torus fits in f32");
         let mesh = Arc::new(mesh);

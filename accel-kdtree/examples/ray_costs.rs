@@ -4,10 +4,10 @@
 //! (a glTF file is framed from the same side as the generated meshes)
 //! (`ONLY=kdtree-default` traces one structure, e.g. under callgrind).
 
-use accel_core::scenes::{Camera, GeneratedScene};
 use accel_core::{Accelerator, TraversalCounters, TriangleMesh};
 use accel_grid::Grid;
 use accel_kdtree::{KdTree, KdTreeParams};
+use accel_scenes::{Camera, GeneratedScene};
 use std::time::Instant;
 
 /// Whether `ONLY` (if set) names this structure; others are not even built.
@@ -70,14 +70,14 @@ fn main() {
         .as_deref()
         .filter(|o| o.ends_with(".glb") || o.ends_with(".gltf"))
     {
-        let mesh = match accel_core::gltf_scene::load(std::path::Path::new(path)) {
+        let mesh = match accel_scenes::gltf::load(std::path::Path::new(path)) {
             Ok(scene) => scene.mesh,
             Err(e) => {
                 eprintln!("{path}: {e}");
                 std::process::exit(2);
             }
         };
-        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE);
+        let camera = Camera::frame(&mesh.bounds(), Camera::DEFAULT_SIDE, accel_scenes::Z_UP);
         let mesh = mesh.cast::<f32>().expect("fits f32");
         println!("{path}");
         structures(&mesh, &camera.rays::<f32>(256, 256), true);

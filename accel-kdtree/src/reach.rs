@@ -176,8 +176,8 @@ mod tests {
 
     #[test]
     fn a_tree_narrows_its_beam_only_where_the_scene_dwarfs_its_primitives() {
-        use accel_core::scenes::sphere_in_tiled_box;
         use accel_core::{Triangle, TriangleMesh};
+        use accel_scenes::sphere_in_tiled_box;
         // The same dense sphere (triangles about 0.06 across) in a stadium of
         // side 10^4, where the query beam is about 0.02 wide, and of side 10,
         // where it is about 2e-5. The walls are tiled 20 × 20 per face, so

@@ -1,13 +1,11 @@
 //! The tree's shape: real splits, the naive build on a scene large enough to
 //! be built in parallel, named edge cases, and typed errors.
 
-use accel_core::scenes::{
-    box_mesh, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere,
-};
 use accel_core::{
     Aabb, Accelerator, BruteForce, BuildError, PrimitiveSet, Ray, Sphere, TriangleMesh, Vec3,
 };
 use accel_kdtree::{KdTree, KdTreeParams};
+use accel_scenes::{box_mesh, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
 
 fn assert_same_tree<T: accel_core::Real, P: accel_core::PrimitiveSet<T> + ?Sized>(
     a: &KdTree<'_, T, P>,
@@ -119,7 +117,7 @@ fn binned_splits_near_the_root_cost_little_and_answer_exactly() {
         "binned SAH cost {binned_cost} against exact {exact_cost}"
     );
     let brute = BruteForce::new(&mesh).unwrap();
-    for ray in accel_core::scenes::random_rays::<f64>(&mesh.bounds(), 2000, 11) {
+    for ray in accel_scenes::random_rays::<f64>(&mesh.bounds(), 2000, 11) {
         assert_eq!(
             binned_tree.intersect(&ray).unwrap().map(|h| h.bit_key()),
             brute.intersect(&ray).unwrap().map(|h| h.bit_key())
@@ -570,7 +568,7 @@ fn bad_input_gets_typed_errors() {
 
 #[test]
 fn rays_leaving_a_flat_floor_walk_none_of_its_nodes() {
-    use accel_core::scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
+    use accel_scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
     // A floor of 40 × 25 quads (2,000 triangles) at z = 0 with 4,000
     // triangles standing at its centre, in f32: the floor is a part of its
     // own, whose flat bounds a ray spawned just above it and going up

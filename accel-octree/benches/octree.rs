@@ -14,11 +14,11 @@
 //! Memory and shape are printed once per scene (criterion has no unit for
 //! them), e.g. `teapot_in_stadium: grid 41.9 B/tri, octree 40.3 B/tri (0.96x)`.
 
-use accel_core::gltf_scene::{load, shared_scene_files};
-use accel_core::scenes::{Camera, GeneratedScene, random_rays};
 use accel_core::{Accelerator, Ray, TriangleMesh, Vec3};
 use accel_grid::Grid;
 use accel_octree::{Octree, OctreeParams};
+use accel_scenes::gltf::{load, shared_scene_files};
+use accel_scenes::{Camera, GeneratedScene, random_rays};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -64,7 +64,11 @@ fn scenes() -> Vec<BenchScene> {
         let Ok(mesh) = scene.mesh.cast() else {
             continue;
         };
-        let camera = Camera::frame(&scene.mesh.bounds(), Vec3::new(0.3, -1.0, 0.4));
+        let camera = Camera::frame(
+            &scene.mesh.bounds(),
+            Vec3::new(0.3, -1.0, 0.4),
+            accel_scenes::Z_UP,
+        );
         out.push(BenchScene { name, mesh, camera });
     }
     out

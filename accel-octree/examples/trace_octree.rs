@@ -7,15 +7,16 @@
 //! sphere_100k, soup_100k, terrain_1m, teapot_in_stadium (default
 //! teapot_in_stadium).
 
-use accel_core::scenes::driver::TraceDriver;
 use accel_octree::Octree;
+use accel_scenes::TraceDriver;
 use std::time::Instant;
 
 fn main() {
-    let run = TraceDriver::from_args("teapot_in_stadium").unwrap_or_else(|e| {
-        eprintln!("{e}");
-        std::process::exit(2);
-    });
+    let run =
+        TraceDriver::from_args(std::env::args().skip(1), "teapot_in_stadium").unwrap_or_else(|e| {
+            eprintln!("{e}");
+            std::process::exit(2);
+        });
     let start = Instant::now();
     let tree = Octree::new(&run.mesh).expect("octree builds");
     println!(

@@ -1,8 +1,8 @@
 //! A floor as a part of its own: rays that leave it walk none of its cells.
 
-use accel_core::scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
 use accel_core::{Accelerator, BruteForce, TraversalCounters, TriangleMesh};
 use accel_octree::{Octree, OctreeParams};
+use accel_scenes::{FlatFieldSpec, flat_field, rays_leaving_the_floor};
 
 #[test]
 fn rays_leaving_a_flat_floor_walk_none_of_its_cells() {

@@ -3,9 +3,9 @@
 //! leak. The octree must answer exactly as brute force on each of them, in
 //! f32 far from the origin too.
 
-use accel_core::scenes::{box_mesh, teapot_in_stadium, torus, uv_sphere};
 use accel_core::{Aabb, Accelerator, BruteForce, Ray, Real, TriangleMesh, Vec3};
 use accel_octree::{Octree, OctreeParams};
+use accel_scenes::{box_mesh, teapot_in_stadium, torus, uv_sphere};
 
 /// Every vertex and every edge midpoint of `mesh`'s first `closed` triangles.
 fn targets<T: Real>(mesh: &TriangleMesh<T>, closed: usize) -> Vec<Vec3<T>> {

@@ -5,13 +5,14 @@
 //! output paths are opened (as temporary files) and ray files read before the
 //! scene is built.
 
-use crate::accel::{self, AccelConfig, AccelKind};
 use crate::bench::{self, BenchReport, RayKind, RaySet, SetInfo};
-use crate::choose::{self, ProbeRay};
 use crate::cli::{self, BenchArgs, Precision, RenderArgs};
 use crate::heatmap::heat_map;
 use crate::output::PendingFile;
-use crate::rayfile;
+use crate::probe::{ProbeShape, view_probe};
+use accel::choose::{self, ProbeRay};
+use accel::{AccelConfig, AccelKind};
+
 use crate::scene::{Scene, SceneSource};
 use crate::shade::{Pixel, Shader, Tally, to_srgb8};
 use crate::tiles::{for_each_pixel, progress_bar};
@@ -34,7 +35,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 /// Refuses output names the PNG encoder would not match.
-pub(crate) fn check_png_name(path: &Path, option: &str) -> Result<()> {
+pub fn check_png_name(path: &Path, option: &str) -> Result<()> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -52,7 +53,7 @@ pub(crate) fn check_png_name(path: &Path, option: &str) -> Result<()> {
 /// `--precision f64` in `f32`) when a coordinate does not fit `T` or lies
 /// beyond the range the accelerators accept ([`Real::LIMIT`]): every
 /// structure, brute force included, would refuse it.
-pub(crate) fn mesh_in<T: Real>(scene: &Scene) -> Result<TriangleMesh<T>> {
+pub fn mesh_in<T: Real>(scene: &Scene) -> Result<TriangleMesh<T>> {
     let mesh = scene.mesh.cast::<T>().with_context(|| {
         format!(
             "{}: the scene does not fit in {} (use --precision f64)",
@@ -90,7 +91,7 @@ fn choose_failed<T: Real>(e: choose::ChooseError) -> anyhow::Error {
 }
 
 /// Loads the scene named by a SCENE argument, reporting how long it took.
-pub(crate) fn load_scene(arg: &str) -> Result<Scene> {
+pub fn load_scene(arg: &str) -> Result<Scene> {
     let start = Instant::now();
     let scene = SceneSource::parse(arg)?.load()?;
     let b = scene.mesh.bounds();
@@ -254,12 +255,12 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let accel = match args.accel.kind() {
         Some(kind) => accel::build_config(&args.dials.config(kind), prims)?,
         None => {
-            let choice = choose::choose(prims, expected_render_rays(args), |a| {
-                choose::view_probe(
+            let choice = accel::choose_with_probe(prims, expected_render_rays(args), |a| {
+                view_probe(
                     a,
                     mesh,
                     &scene.view,
-                    choose::ProbeShape {
+                    ProbeShape {
                         width: args.width,
                         height: args.height,
                         ao: args.ao,
@@ -283,7 +284,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     );
     let (w, h) = (args.width, args.height);
     let shader = Shader {
-        accel: accel.as_ref(),
+        accel: accel.as_dyn(),
         mesh,
         scene,
         width: w,
@@ -310,7 +311,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     for p in &pixels {
         tally.add(&p.tally);
     }
-    report_trace(&tally, elapsed, w, h, args, accel.as_ref());
+    report_trace(&tally, elapsed, w, h, args, accel.as_dyn());
     let rgb: Vec<u8> = pixels
         .iter()
         .flat_map(|p: &Pixel| p.rgb.map(to_srgb8))
@@ -390,7 +391,11 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         .as_deref()
         .map(PendingFile::create)
         .transpose()?;
-    let file_rays = args.rays.as_deref().map(rayfile::read).transpose()?;
+    let file_rays = args
+        .rays
+        .as_deref()
+        .map(accel_scenes::rayfile::read)
+        .transpose()?;
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
@@ -458,7 +463,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         None => {
             let generator = accel::build(bench::RAY_GENERATOR, prims)?;
             let sets = bench::generate_rays_from(
-                generator.as_ref(),
+                generator.as_dyn(),
                 mesh,
                 &scene.view,
                 args.width,
@@ -484,7 +489,8 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 })
             })
             .collect();
-        let choice = choose::choose(prims, total, |_| Ok(probe)).map_err(choose_failed::<T>)?;
+        let choice =
+            accel::choose_with_probe(prims, total, |_| Ok(probe)).map_err(choose_failed::<T>)?;
         println!("auto: {} ({})", choice.config, choice.reason);
         if !configs.contains(&choice.config) {
             configs.push(choice.config);
@@ -501,7 +507,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     if let Some(out) = io.rays_out {
         let all: Vec<_> = sets.iter().flat_map(|s| s.rays.iter().copied()).collect();
         let dest = out.dest().display().to_string();
-        out.write_all(&rayfile::encode(&all))?;
+        out.write_all(&accel_scenes::rayfile::encode(&all))?;
         println!("wrote {} rays to {dest} (in the order listed)", all.len());
     }
     let min_time = Duration::from_secs_f64(args.min_time);

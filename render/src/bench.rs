@@ -15,14 +15,14 @@
 //! seconds. Every accelerator must give the same hits and digest as the
 //! first; a disagreement is an error.
 
-use crate::accel::{self, AccelConfig, AccelKind};
 use crate::scene::View;
 use crate::shade::{cosine_direction, mix, spawn};
-use accel_core::scenes::SplitMix64;
+use accel::{AccelConfig, AccelKind};
 use accel_core::spawn::SpawnOffset;
 use accel_core::{
     Accelerator, PrimitiveSet, QueryError, Ray, Real, TraversalCounters, TriangleMesh,
 };
+use accel_scenes::SplitMix64;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::{Duration, Instant};
@@ -355,7 +355,7 @@ fn answer<T: Real>(
 }
 
 /// Hits of one uncounted pass.
-pub(crate) fn count_hits<T: Real>(
+pub fn count_hits<T: Real>(
     accel: &dyn Accelerator<T>,
     any_hit: bool,
     rays: &[Ray<T>],
@@ -563,7 +563,7 @@ pub fn measure_accel<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let stats = accel.stats();
     let sets = sets
         .iter()
-        .map(|set| measure_set(accel.as_ref(), kind.name(), set, min_time))
+        .map(|set| measure_set(accel.as_dyn(), kind.name(), set, min_time))
         .collect::<Result<_, _>>()?;
     Ok(AccelResult {
         accel: kind.name(),
@@ -668,7 +668,7 @@ mod tests {
         let scene = default_scene().unwrap();
         let mesh = scene.mesh.cast::<f32>().unwrap();
         let grid = accel::build(AccelKind::Grid, &mesh).unwrap();
-        let sets = generate_rays(grid.as_ref(), &mesh, &scene.view, 24, 16).unwrap();
+        let sets = generate_rays(&grid, &mesh, &scene.view, 24, 16).unwrap();
         let kinds: Vec<_> = sets.iter().map(|s| s.kind).collect();
         assert_eq!(kinds, [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse]);
         assert_eq!(sets[0].rays.len(), 24 * 16);
@@ -689,7 +689,7 @@ mod tests {
         let scene = default_scene().unwrap();
         let mesh = scene.mesh.cast::<f32>().unwrap();
         let grid = accel::build(AccelKind::Grid, &mesh).unwrap();
-        let sets = generate_rays(grid.as_ref(), &mesh, &scene.view, 8, 6).unwrap();
+        let sets = generate_rays(&grid, &mesh, &scene.view, 8, 6).unwrap();
         let results: Vec<_> = [AccelKind::Grid, AccelKind::Brute]
             .into_iter()
             .map(|k| {

@@ -3,9 +3,9 @@
 //! Every numeric option has a range checked by clap, so absurd sizes are
 //! refused before any work starts (see [`limits`]).
 
-use crate::accel::{
-    AccelChoice, AccelConfig, AccelKind, GRID_LAYOUT, KDTREE_PRESETS, OCTREE_PRESETS,
-    kdtree_preset, octree_preset,
+use accel::{
+    AccelConfig, AccelKind, GRID_LAYOUT, KDTREE_PRESETS, OCTREE_PRESETS, kdtree_preset,
+    octree_preset,
 };
 use accel_core::packed::Layout;
 use accel_core::spawn::SpawnOffset;
@@ -13,6 +13,36 @@ use accel_core::{Real, TriangleTest};
 use clap::builder::PossibleValuesParser;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
+
+/// What `--accel` accepts: a kind, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AccelChoice {
+    /// The uniform grid.
+    Grid,
+    /// The octree of nested grids.
+    Octree,
+    /// The SAH kD-tree.
+    Kdtree,
+    /// Brute force (the reference; slow on large scenes).
+    Brute,
+    /// Chosen per scene and ray budget (structure and parameters) from a
+    /// short probe of build and query cost; the reason is printed.
+    Auto,
+}
+
+impl AccelChoice {
+    /// The kind named, or `None` for `auto`.
+    #[must_use]
+    pub const fn kind(self) -> Option<AccelKind> {
+        match self {
+            Self::Grid => Some(AccelKind::Grid),
+            Self::Octree => Some(AccelKind::Octree),
+            Self::Kdtree => Some(AccelKind::KdTree),
+            Self::Brute => Some(AccelKind::Brute),
+            Self::Auto => None,
+        }
+    }
+}
 
 /// The ranges the command line accepts.
 pub mod limits {
@@ -61,28 +91,15 @@ Examples:
   render teapot_in_stadium --heatmap=heat.png
   render bench soup_100k --json soup.json
   render bench scene.glb --rays rays.bin --accel grid,brute
-  render tradeoff all --csv docs/tradeoff.csv --plot docs/tradeoff.png
-  render sweep-density all --plot docs/sweep-density.png
-  render choose-bench all
-  render peers terrain_1m                  (peers: cargo run --release -p render --features peers,embree)";
+
+The studies (tradeoff, sweep-density, choose-bench, peers) are the studies binary:
+  cargo run --release -p studies -- --help";
 
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Measure build time, memory and Mrays/s per accelerator and ray kind.
     Bench(Box<BenchArgs>),
-    /// Measure every speed-against-accuracy dial: throughput, build time,
-    /// memory, mismatches, leaks and self-intersections per setting.
-    Tradeoff(crate::tradeoff::TradeoffArgs),
-    /// Sweep the grid density m: Mrays/s and build time against cells per object.
-    SweepDensity(crate::sweep::SweepArgs),
-    /// Run every accelerator on every scene and compare `--accel auto`'s
-    /// choice with the best (total time: build + rays).
-    ChooseBench(crate::choose_bench::ChooseBenchArgs),
-    /// Run our accelerators and the peers (obvhs, parry3d, bvh with
-    /// `--features peers`; Embree 3 with `--features embree`) on the same
-    /// scene and rays on one thread: Mrays/s, ratios, build times, agreement.
-    Peers(crate::peers::run::PeersArgs),
 }
 
 /// Floating-point precision of the geometry, rays and queries.
@@ -262,7 +279,7 @@ pub enum SpawnChoice {
 
 /// The speed-against-accuracy dials shared by `render` and `render bench`
 /// (precision is `--precision`). Each buys speed or memory with accuracy or
-/// the reverse; `render tradeoff` measures them.
+/// the reverse; `studies tradeoff` measures them.
 #[derive(Clone, Debug, Default, Args)]
 pub struct DialArgs {
     /// Ray–triangle test (moller-trumbore: faster, leaks through shared edges).
@@ -789,5 +806,15 @@ mod tests {
         let err = check_render_totals(&cli.render).unwrap_err();
         assert!(err.contains("rays"), "{err}");
         assert!(check_render_totals(&parse(&[]).unwrap().render).is_ok());
+    }
+
+    #[test]
+    fn choices_name_their_kinds() {
+        assert_eq!(AccelChoice::Kdtree.kind(), Some(AccelKind::KdTree));
+        assert_eq!(AccelChoice::Auto.kind(), None);
+        for k in AccelKind::ALL {
+            let parsed = AccelChoice::from_str(k.name(), false).unwrap();
+            assert_eq!(parsed.kind(), Some(k));
+        }
     }
 }

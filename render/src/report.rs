@@ -4,6 +4,8 @@
 //! it from `source()` (thiserror does so for any field called `source`), so
 //! the usual `{:#}` chain printed `X: X`. [`one_line`] walks the chain and
 //! skips a cause whose text the message already contains (issue 32, item 5).
+//! [`clap_line`] does the same for a command-line error. Both binaries,
+//! `render` and `studies`, report through them.
 
 /// The error and its causes, outermost first, joined by `": "`, leaving out
 /// every cause whose text is already part of the report.
@@ -21,6 +23,21 @@ pub fn one_line(err: &anyhow::Error) -> String {
         report.push_str(&text);
     }
     report
+}
+
+/// A command-line error in one line: clap's first line, without its
+/// `error: ` prefix, then the possible values and tips, on the same line.
+#[must_use]
+pub fn clap_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let mut lines = text.lines().map(str::trim);
+    let first = lines.next().unwrap_or("invalid arguments");
+    let mut message = first.strip_prefix("error: ").unwrap_or(first).to_owned();
+    for l in lines.filter(|l| l.starts_with("[possible values") || l.starts_with("tip:")) {
+        message.push_str("; ");
+        message.push_str(l);
+    }
+    message
 }
 
 #[cfg(test)]

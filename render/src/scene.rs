@@ -6,12 +6,12 @@
 //!
 //! Sources: the embedded default scene ([`default_scene`]), the workspace's
 //! generated benchmark scenes ([`GeneratedScene`]), or a glTF file loaded by
-//! [`accel_core::gltf_scene::load`], seen through its first camera or framed
+//! [`accel_scenes::gltf::load`], seen through its first camera or framed
 //! automatically (glTF is y-up).
 
-use accel_core::gltf_scene::{self, LoadError, SceneCamera};
-use accel_core::scenes::{Camera, GeneratedScene, box_mesh, random_soup, torus, uv_sphere};
 use accel_core::{Aabb, MeshError, TriangleMesh, Vec3};
+use accel_scenes::gltf::{self, LoadError, SceneCamera};
+use accel_scenes::{Camera, GeneratedScene, Y_UP, Z_UP, box_mesh, random_soup, torus, uv_sphere};
 use std::path::{Path, PathBuf};
 
 /// The name of the embedded default scene.
@@ -193,8 +193,6 @@ fn plane_coords(p: Vec3<f64>, up: Vec3<f64>) -> (f64, f64) {
 }
 
 const GREY: Albedo = Albedo::Solid([0.75, 0.75, 0.75]);
-const Z_UP: Vec3<f64> = Vec3::new(0.0, 0.0, 1.0);
-const Y_UP: Vec3<f64> = Vec3::new(0.0, 1.0, 0.0);
 
 /// Collects meshes and their colours into one mesh with material ranges.
 struct Builder {
@@ -378,21 +376,6 @@ fn view_from(camera: Camera, up: Vec3<f64>, focus: Vec3<f64>) -> View {
     }
 }
 
-/// A camera looking at the centre of `b` from direction `from`, far enough
-/// that the whole box fits a 45° view.
-#[must_use]
-pub fn frame(b: &Aabb<f64>, from: Vec3<f64>, up: Vec3<f64>) -> Camera {
-    let center = b.center();
-    let mut radius = b.diagonal().length() * 0.5;
-    if !(radius > 0.0) {
-        // A single point: any sensible distance will do.
-        radius = (center.abs().max_component() * 1e-3).max(1.0);
-    }
-    let vfov: f64 = 45.0;
-    let distance = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
-    Camera::look_at(center + from.normalized() * distance, center, up, vfov)
-}
-
 /// A camera from the file's description, if it is usable.
 fn file_camera(c: &SceneCamera) -> Result<Camera, &'static str> {
     let finite = c.eye.is_finite() && c.forward.is_finite() && c.up.is_finite();
@@ -419,7 +402,7 @@ fn file_camera(c: &SceneCamera) -> Result<Camera, &'static str> {
 /// # Errors
 /// [`SceneError::Load`] naming the file and the problem.
 pub fn file_scene(path: &Path) -> Result<Scene, SceneError> {
-    let loaded = gltf_scene::load(path)?;
+    let loaded = gltf::load(path)?;
     let bounds = loaded.mesh.bounds();
     let mut notes = Vec::new();
     let camera = match loaded.cameras.first().map(file_camera) {
@@ -431,11 +414,11 @@ pub fn file_scene(path: &Path) -> Result<Scene, SceneError> {
             notes.push(format!(
                 "camera: framed automatically (the file's first camera is unusable: {why})"
             ));
-            frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
+            Camera::frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
         }
         None => {
             notes.push("camera: framed automatically (the file has none)".to_owned());
-            frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
+            Camera::frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
         }
     };
     Ok(Scene {
@@ -453,7 +436,7 @@ pub fn file_scene(path: &Path) -> Result<Scene, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use accel_core::gltf_scene::shared_scene_files_for_test;
+    use accel_scenes::gltf::shared_scene_files_for_test;
 
     #[test]
     fn names_and_paths_are_told_apart() {
@@ -494,25 +477,6 @@ mod tests {
         let b2 = s.albedo(0, Vec3::new(1.5, 0.5, 0.0));
         assert_ne!(a, b2, "checker squares alternate");
         assert_eq!(s.albedo(3, Vec3::ZERO), [0.9, 0.5, 0.25]);
-    }
-
-    #[test]
-    fn framing_sees_the_whole_box() {
-        let b = Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 4.0));
-        let cam = frame(&b, Vec3::new(0.0, 0.0, 1.0), Y_UP);
-        let to_center = (b.center() - cam.eye).normalized();
-        assert!((to_center.dot(cam.forward) - 1.0).abs() < 1e-12);
-        // Every corner lies within the vertical half-angle of the view axis.
-        for i in 0..8 {
-            let d = (b.corner(i) - cam.eye).normalized();
-            assert!(d.dot(cam.forward) > (cam.vfov * 0.5).cos(), "corner {i}");
-        }
-        let point = Aabb::from_point(Vec3::new(5.0, 5.0, 5.0));
-        assert!(
-            frame(&point, Vec3::new(1.0, 1.0, 1.0), Y_UP)
-                .eye
-                .is_finite()
-        );
     }
 
     /// One row of the table of `shared/scenes/README.md`.

@@ -14,9 +14,9 @@
 //! leave; or, with `--spawn epsilon`, the textbook fixed offset.
 
 use crate::scene::Scene;
-use accel_core::scenes::SplitMix64;
 use accel_core::spawn::{SpawnOffset, spawn_origin};
 use accel_core::{Accelerator, Hit, QueryError, Ray, Real, TraversalCounters, TriangleMesh, Vec3};
+use accel_scenes::SplitMix64;
 
 /// What the shader needs for every pixel.
 pub struct Shader<'a, T: Real> {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use accel_kdtree::KdTreeParams;
+use accel::KdTreeParams;
 use common::{line, run, stdout};
 use serde_json::Value;
 

@@ -3,9 +3,9 @@
 
 mod common;
 
-use accel_core::gltf_scene::shared_scene_files_for_test;
+use accel::AccelKind;
+use accel_scenes::gltf::shared_scene_files_for_test;
 use common::{Gltf, SQUARE, SQUARE_INDICES, line, run, stdout};
-use render::accel::AccelKind;
 
 /// Small enough for the dev profile with brute force on the default scene.
 const SMALL: [&str; 8] = ["--width", "32", "--height", "24", "--spp", "2", "--ao", "2"];

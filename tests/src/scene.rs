@@ -7,10 +7,10 @@
 //! description tests `f32` and `f64` at their own extremes.
 
 use crate::Mixed;
-use accel_core::scenes::{
+use accel_core::{Aabb, Real, TriangleMesh, Vec3};
+use accel_scenes::{
     FlatFieldSpec, box_mesh, flat_field, teapot_in_stadium, terrain, torus, uv_sphere,
 };
-use accel_core::{Aabb, Real, TriangleMesh, Vec3};
 
 /// A triangle in unit-sized coordinates.
 pub type Tri = [[f64; 3]; 3];
@@ -193,7 +193,7 @@ pub enum SceneSpec {
     },
     /// A flat field of `quads × quads` quads over `10 × 10` with two
     /// dense meshes (about `dense` triangles) standing at its centre
-    /// ([`accel_core::scenes::flat_field`]): rays leaving the field.
+    /// ([`accel_scenes::flat_field`]): rays leaving the field.
     FlatField {
         /// Quads along each side of the field.
         quads: u32,

@@ -174,7 +174,7 @@ proptest! {
 
 #[test]
 fn invalid_regions_are_refused_at_build() {
-    let mesh = accel_core::scenes::uv_sphere(Vec3::ZERO, 1.0, 50);
+    let mesh = accel_scenes::uv_sphere(Vec3::ZERO, 1.0, 50);
     let nan = Aabb {
         min: Vec3::new(0.0, f64::NAN, 0.0),
         max: Vec3::splat(1.0),
@@ -195,7 +195,7 @@ fn invalid_regions_are_refused_at_build() {
 
 #[test]
 fn a_region_away_from_the_scene_holds_nothing() {
-    let mesh = accel_core::scenes::uv_sphere(Vec3::ZERO, 1.0, 50);
+    let mesh = accel_scenes::uv_sphere(Vec3::ZERO, 1.0, 50);
     let away = Aabb::new(Vec3::splat(5.0), Vec3::splat(6.0));
     let grid = Grid::with_params(&mesh, &GridParams::with_region(away)).unwrap();
     assert_eq!(grid.stats().references, 0);

@@ -212,7 +212,7 @@ struct World {
 /// Loads the world: the mesh is made here and leaves with the structures
 /// (with borrowing structures, this function could not be written).
 fn load() -> World {
-    let mesh = accel_core::scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
+    let mesh = accel_scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
         .cast::<f32>()
         .expect("an f32 torus");
     let mesh = Arc::new(mesh);
@@ -278,7 +278,7 @@ type OwnedFast = MollerTrumboreMesh<'static, f32, Arc<TriangleMesh<f32>>>;
 /// A mesh and a kD-tree over its Möller–Trumbore wrapper, built and
 /// returned together.
 fn load_fast() -> (Arc<TriangleMesh<f32>>, SharedKdTree<f32, OwnedFast>) {
-    let mesh = accel_core::scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
+    let mesh = accel_scenes::torus(Vec3::new(0.0, 0.0, 0.0), 1.0, 0.25, 24, 12)
         .cast::<f32>()
         .expect("an f32 torus");
     let mesh = Arc::new(mesh);
@@ -292,7 +292,7 @@ fn an_owned_fast_test_wrapper_answers_as_the_borrowing_one() {
     assert!(std::ptr::eq(tree.primitives().mesh(), &*mesh));
     let borrowed = MollerTrumboreMesh::new(&*mesh);
     let brute = BruteForce::new(&borrowed).unwrap();
-    let rays = accel_core::scenes::random_rays::<f32>(&mesh.bounds().cast(), 2000, 11);
+    let rays = accel_scenes::random_rays::<f32>(&mesh.bounds().cast(), 2000, 11);
     let mut hits = 0;
     for ray in &rays {
         let want = brute.intersect(ray).unwrap();

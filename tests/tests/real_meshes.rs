@@ -5,15 +5,15 @@
 //! surface, narrow windows), region boxes, and, for closed meshes, rays aimed
 //! at shared edges and vertices, which must not leak.
 
-use accel_core::gltf_scene::{load, shared_scene_files_for_test};
-use accel_core::scenes::{Camera, random_rays};
 use accel_core::{BruteForce, Ray, Real, TriangleMesh};
+use accel_scenes::gltf::{load, shared_scene_files_for_test};
+use accel_scenes::{Camera, random_rays};
 use accel_tests::Landmarks;
 use accel_tests::assertions::{Expected, check_accelerator};
 use accel_tests::registry::accelerators;
 use accel_tests::strategies::{aim_in, boxes_in, ray_in, window};
 use accel_tests::suite::resolve;
-use accel_tests::watertight::{ClosedMesh, assert_no_leaks};
+use accel_tests::watertight::{ClosedParts, assert_no_leaks};
 use proptest::strategy::{Strategy, ValueTree};
 use proptest::test_runner::TestRunner;
 
@@ -46,7 +46,7 @@ fn check_mesh<T: Real>(name: &str, mesh: &TriangleMesh<T>) -> Result<String, Str
     let resolved = resolve(mesh, Landmarks::of_mesh(mesh), &specs, &box_specs)?;
     let (mut rays, regions) = (resolved.rays, resolved.regions);
     let b = mesh.bounds().cast::<f64>();
-    let camera = Camera::frame(&b, Camera::DEFAULT_SIDE);
+    let camera = Camera::frame(&b, Camera::DEFAULT_SIDE, accel_scenes::Z_UP);
     rays.extend(camera.rays::<T>(CAMERA_SIDE, CAMERA_SIDE));
     rays.extend(random_rays::<T>(&b, RANDOM_RAYS, 0x5eed));
 
@@ -69,7 +69,7 @@ fn check_mesh<T: Real>(name: &str, mesh: &TriangleMesh<T>) -> Result<String, Str
         rays.len(),
         regions.len()
     );
-    match ClosedMesh::new(mesh) {
+    match ClosedParts::closed(mesh) {
         Some(closed) => {
             let aims = sample(proptest::collection::vec(aim_in(n), AIMS), &mut runner);
             let aimed: Vec<Ray<T>> = aims.iter().filter_map(|a| closed.ray(a)).collect();

@@ -9,14 +9,14 @@ use accel_tests::config::config;
 use accel_tests::scene::{Placement, SceneSpec, Shape};
 use accel_tests::strategies::{aim, closed_shape, watertight_placement};
 use accel_tests::suite::check_all;
-use accel_tests::watertight::{Aim, ClosedMesh, assert_no_leaks};
+use accel_tests::watertight::{Aim, ClosedParts, assert_no_leaks};
 use proptest::prelude::*;
 
 fn run<T: Real>(shape: Shape, place: Placement, aims: &[Aim]) -> Result<(), TestCaseError> {
     let Scene::Mesh(mesh) = SceneSpec::Closed(shape, place).build::<T>() else {
         unreachable!("closed shapes are meshes");
     };
-    let closed = ClosedMesh::new(&mesh).ok_or_else(|| {
+    let closed = ClosedParts::closed(&mesh).ok_or_else(|| {
         TestCaseError::fail(format!(
             "{shape:?} at {place:?} is not closed in {}",
             T::NAME
@@ -60,7 +60,7 @@ fn aimed_rays_exist_and_hit_on_a_sphere() {
     else {
         unreachable!()
     };
-    let closed = ClosedMesh::new(&mesh).expect("the uv sphere is closed");
+    let closed = ClosedParts::closed(&mesh).expect("the uv sphere is closed");
     let aims: Vec<Aim> = (0..closed.edge_count())
         .map(|e| Aim {
             target: accel_tests::watertight::Target::Edge(e, 0.5),

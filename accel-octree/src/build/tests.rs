@@ -2,12 +2,12 @@
 
 use crate::node::{Entry, entry};
 use crate::{MAX_DEPTH, Octree, OctreeParams, ResolutionRule};
-use accel_core::scenes::{Camera, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
 use accel_core::{
     Aabb, Accelerator, BruteForce, BuildError, Hit, PrimitiveSet, Ray, Real, Sphere,
     TraversalCounters, TriangleMesh, Vec3,
 };
 use accel_grid::Grid;
+use accel_scenes::{Camera, random_soup, sphere_in_tiled_box, teapot_in_stadium, uv_sphere};
 
 /// A small teapot in a stadium: 5,000 triangles of sphere in a box of side 1e4.
 fn stadium() -> TriangleMesh<f64> {

@@ -1,15 +1,8 @@
 //! Ray, window and box strategies.
 
 use crate::{BoxSpec, HitWindow, RaySpec, WindowSpec};
+pub use accel_scenes::strategies::unit;
 use proptest::prelude::*;
-
-/// A unit coordinate: mostly uniform, sometimes exactly 0, ¼, ½, ¾ or 1.
-pub fn unit() -> impl Strategy<Value = f64> + Clone {
-    prop_oneof![
-        6 => 0.0..=1.0f64,
-        1 => prop::sample::select(vec![0.0, 0.25, 0.5, 0.75, 1.0]),
-    ]
-}
 
 /// A point in unit coordinates.
 pub fn unit3() -> impl Strategy<Value = [f64; 3]> + Clone {

@@ -3,6 +3,7 @@
 use super::rays::unit;
 use crate::scene::{Degenerate, DegenerateKind, Item, LineKind, Placement, SceneSpec, Shape, Tri};
 use accel_core::Real;
+use accel_scenes::strategies::lattice_tri;
 use proptest::prelude::*;
 
 /// The offsets (in scene sizes) that put a scene far from the origin in
@@ -52,10 +53,6 @@ fn point() -> impl Strategy<Value = [f64; 3]> + Clone {
 /// A triangle in the unit cube.
 pub fn tri() -> impl Strategy<Value = Tri> + Clone {
     [point(), point(), point()]
-}
-
-fn lattice_tri() -> impl Strategy<Value = [[i8; 3]; 3]> {
-    prop::array::uniform3(prop::array::uniform3(-4i8..=4))
 }
 
 /// A closed mesh (sphere, box or torus) or a heightfield, with few triangles.

@@ -1,9 +1,9 @@
 //! Strategies for the watertightness suite.
 
-use super::rays::unit;
 use crate::scene::Placement;
-use crate::watertight::{Aim, Target};
 use accel_core::Real;
+use accel_scenes::aimed::Aim;
+pub use accel_scenes::strategies::aim_in;
 use proptest::prelude::*;
 
 /// Placements under which a unit mesh stays well-conditioned in `T` (its
@@ -26,27 +26,4 @@ pub fn watertight_placement<T: Real>() -> BoxedStrategy<Placement> {
 /// A ray aimed at a vertex or at a point of an edge (its ends included).
 pub fn aim() -> BoxedStrategy<Aim> {
     aim_in(super::INDEX_RANGE)
-}
-
-/// [`aim`] with vertex and edge indices drawn from `0..max_index`.
-pub fn aim_in(max_index: usize) -> BoxedStrategy<Aim> {
-    let target = prop_oneof![
-        (0..max_index).prop_map(Target::Vertex),
-        (
-            0..max_index,
-            prop_oneof![4 => unit(), 1 => prop::sample::select(vec![0.0, 1.0])]
-        )
-            .prop_map(|(e, s)| Target::Edge(e, s)),
-    ];
-    (
-        target,
-        [-1.0..=1.0f64, -1.0..=1.0f64, -1.0..=1.0f64],
-        prop::sample::select(vec![-1, 0, 1, 3]),
-    )
-        .prop_map(|(target, jitter, distance_exp)| Aim {
-            target,
-            jitter,
-            distance_exp,
-        })
-        .boxed()
 }

@@ -1,9 +1,9 @@
-//! `render peers SCENE`: our accelerators and the peers on identical scenes
+//! `studies peers SCENE`: our accelerators and the peers on identical scenes
 //! and rays, in one process, on one thread.
 //!
 //! Every structure is built on one thread (ours in a one-thread rayon pool,
 //! Embree with `threads=1`, the Rust peers without their parallel
-//! features); build times are wall-clock. The rays are [`mod@crate::bench`]'s
+//! features); build times are wall-clock. The rays are [`mod@render::bench`]'s
 //! (primary, shadow, diffuse, generated from the scene's view through our
 //! kD-tree) or a binary ray file's. Each tool traces each set once to record
 //! every answer, then repeats passes for at least `--min-time` seconds and
@@ -20,12 +20,12 @@
 //! its own way.
 
 use super::{Agreement, EMBREE, PeerHit, PeerKind, PeerMesh, SetAnswers, T_TOLERANCE, compare};
-use crate::accel::{self, AccelConfig, AccelKind};
-use crate::app::{load_scene, mesh_in};
-use crate::bench::{self, Answers, RayKind, RaySet};
-use crate::cli::{min_time_parser, side_parser};
-use crate::output::PendingFile;
-use crate::rayfile;
+use accel::{AccelConfig, AccelKind};
+use render::app::{load_scene, mesh_in};
+use render::bench::{self, Answers, RayKind, RaySet};
+use render::cli::{min_time_parser, side_parser};
+use render::output::PendingFile;
+
 use accel_core::{Accelerator, Ray};
 use anyhow::{Context, Result, anyhow};
 use clap::builder::PossibleValuesParser;
@@ -55,7 +55,7 @@ fn tool_names() -> Vec<&'static str> {
         .collect()
 }
 
-/// Options of `render peers [SCENE]`.
+/// Options of `studies peers [SCENE]`.
 #[derive(Clone, Debug, Args)]
 pub struct PeersArgs {
     /// A .gltf/.glb file or a built-in scene name.
@@ -283,14 +283,18 @@ impl Tool<'_> {
     }
 }
 
-/// `render peers [SCENE]`.
+/// `studies peers [SCENE]`.
 ///
 /// # Errors
 /// A refused argument, scene, ray file or output file, or a ray our
 /// accelerators refuse. Disagreements are printed, not errors.
 pub fn run(args: &PeersArgs) -> Result<()> {
     let json_out = args.json.as_deref().map(PendingFile::create).transpose()?;
-    let file_rays = args.rays.as_deref().map(rayfile::read).transpose()?;
+    let file_rays = args
+        .rays
+        .as_deref()
+        .map(accel_scenes::rayfile::read)
+        .transpose()?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -357,7 +361,7 @@ fn build_all<'m>(
             let accel = accel::build_config(&AccelConfig::default_for(kind), mesh)?;
             record(kind.name(), true, start.elapsed());
             if first {
-                tools.push(Tool::Ours(kind, accel));
+                tools.push(Tool::Ours(kind, accel.into_dyn()));
             }
         }
         for PeerKind {
@@ -456,7 +460,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 Some(a) => a,
                 None => {
                     own = accel::build(bench::RAY_GENERATOR, &mesh)?;
-                    own.as_ref()
+                    &own
                 }
             };
             let wanted: Vec<RayKind> = args.kinds.iter().map(|k| k.kind()).collect();
@@ -568,7 +572,7 @@ fn print_unavailable(unavailable: &[Unavailable]) {
                 ""
             };
             println!(
-                "not built in: {} (build render with --features {feature}{extra})",
+                "not built in: {} (build studies with --features {feature}{extra})",
                 names.join(", ")
             );
         }

@@ -1,4 +1,4 @@
-//! `render sweep-density`: the seed's claim that grids do best at 8 to 10
+//! `studies sweep-density`: the seed's claim that grids do best at 8 to 10
 //! cells per object (density `m = 2`), measured.
 //!
 //! For each scene and each density `m`, the uniform grid is built (median of
@@ -9,22 +9,22 @@
 //! Mrays/s; the plot shows throughput (relative to the scene's best density)
 //! and build time against cells per object.
 
-use crate::accel::{AccelConfig, build_config};
-use crate::app::{check_png_name, load_scene, mesh_in};
-use crate::bench::{self, RaySet};
-use crate::cli::{density_parser, side_parser, threads_parser};
-use crate::output::PendingFile;
 use crate::plot::{Panel, Series, draw_panels};
 use crate::tradeoff::{scene_list, short_name};
-use accel_core::scenes::GeneratedScene;
+use accel::{AccelConfig, build_config};
 use accel_core::spawn::SpawnOffset;
 use accel_core::{Accelerator, Real};
+use accel_scenes::GeneratedScene;
 use anyhow::{Context, Result};
 use clap::Args;
+use render::app::{check_png_name, load_scene, mesh_in};
+use render::bench::{self, RaySet};
+use render::cli::{density_parser, side_parser, threads_parser};
+use render::output::PendingFile;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-/// Options of `render sweep-density`.
+/// Options of `studies sweep-density`.
 #[derive(Clone, Debug, Args)]
 pub struct SweepArgs {
     /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
@@ -81,7 +81,7 @@ pub struct SweepRow {
     pub mrays_all: f64,
 }
 
-/// `render sweep-density`.
+/// `studies sweep-density`.
 ///
 /// # Errors
 /// Every refusal, as one line naming the problem.
@@ -115,9 +115,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         let scene = load_scene(&name)?;
         let mesh = mesh_in::<f32>(&scene)?;
         let sets = pool.install(|| -> Result<Vec<RaySet<f32>>> {
-            let generator = crate::accel::build(bench::RAY_GENERATOR, &mesh)?;
+            let generator = accel::build(bench::RAY_GENERATOR, &mesh)?;
             Ok(bench::generate_rays_from(
-                generator.as_ref(),
+                generator.as_dyn(),
                 &mesh,
                 &scene.view,
                 args.width,
@@ -175,7 +175,7 @@ fn sweep_one<T: Real>(
 ) -> Result<SweepRow> {
     let config = AccelConfig::grid(m);
     let mut builds = Vec::new();
-    let mut grid: Option<Box<dyn Accelerator<T> + '_>> = None;
+    let mut grid = None;
     let start = Instant::now();
     for _ in 0..repeats {
         let t = Instant::now();
@@ -193,13 +193,13 @@ fn sweep_one<T: Real>(
     for (i, set) in sets.iter().enumerate() {
         // One untimed pass first: caches and clocks warm up.
         std::hint::black_box(
-            bench::count_hits(grid.as_ref(), set.kind.any_hit(), &set.rays, true)
+            bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
                 .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?,
         );
         let mut times = Vec::new();
         for _ in 0..repeats {
             let t = Instant::now();
-            let hits = bench::count_hits(grid.as_ref(), set.kind.any_hit(), &set.rays, true)
+            let hits = bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
                 .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?;
             std::hint::black_box(hits);
             times.push(t.elapsed().as_secs_f64());
@@ -310,15 +310,15 @@ fn panels(rows: &[SweepRow]) -> Vec<Panel> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::AccelKind;
-    use accel_core::scenes::random_soup;
+    use accel::AccelKind;
+    use accel_scenes::random_soup;
 
     #[test]
     fn denser_grids_have_more_cells_per_object_and_the_same_answers() {
         let mesh = random_soup(2_000, 3).cast::<f32>().unwrap();
-        let scene = crate::scene::default_scene().unwrap();
-        let grid = crate::accel::build(AccelKind::Grid, &mesh).unwrap();
-        let sets = bench::generate_rays(grid.as_ref(), &mesh, &scene.view, 16, 12).unwrap();
+        let scene = render::scene::default_scene().unwrap();
+        let grid = accel::build(AccelKind::Grid, &mesh).unwrap();
+        let sets = bench::generate_rays(&grid, &mesh, &scene.view, 16, 12).unwrap();
         let rows: Vec<SweepRow> = [1.0, 2.0, 4.0]
             .iter()
             .map(|&m| sweep_one(&mesh, &sets, m, 1).unwrap())

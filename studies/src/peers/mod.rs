@@ -1,5 +1,5 @@
 //! Peers: other ray-tracing libraries, run on the same scenes and rays as
-//! our accelerators by `render peers` ([`run`]).
+//! our accelerators by `studies peers` ([`run`]).
 //!
 //! Each peer is behind a cargo feature, so that default builds and CI do not
 //! compile it:
@@ -26,8 +26,8 @@ pub mod obvhs;
 #[cfg(feature = "peers")]
 pub mod parry;
 
-use crate::bench::Answers;
 use accel_core::{Ray, TriangleMesh};
+use render::bench::Answers;
 use serde::Serialize;
 use std::time::Duration;
 
@@ -243,7 +243,7 @@ pub fn compare(
         ..Agreement::default()
     };
     let describe = |i: usize, what: String| {
-        let [ox, oy, oz, dx, dy, dz, t0, t1] = crate::rayfile::ray_values(&rays[i]);
+        let [ox, oy, oz, dx, dy, dz, t0, t1] = accel_scenes::rayfile::ray_values(&rays[i]);
         format!(
             "ray {i} (o = ({ox:e}, {oy:e}, {oz:e}), d = ({dx:e}, {dy:e}, {dz:e}), t in [{t0:e}, {t1:e}]): {what}"
         )
@@ -422,9 +422,9 @@ mod tests {
     #[cfg(feature = "peers")]
     #[test]
     fn every_peer_agrees_with_brute_force_away_from_edges() {
-        use accel_core::scenes::{random_rays, random_soup, uv_sphere};
         use accel_core::triangle::intersect_triangle;
         use accel_core::{Accelerator, BruteForce, PreparedRay};
+        use accel_scenes::{random_rays, random_soup, uv_sphere};
 
         let mut scene = random_soup(600, 0x5EED);
         scene

@@ -1,4 +1,4 @@
-//! `render choose-bench`: is `--accel auto` within 10% of the best choice?
+//! `studies choose-bench`: is `--accel auto` within 10% of the best choice?
 //!
 //! For every scene and two ray budgets of a render (`preview`: 160×120,
 //! 1 spp, 1 occlusion ray; `final`: 800×600, 2 spp, 4 occlusion rays; each
@@ -9,26 +9,27 @@
 //! `build + rays × time per ray`. A candidate whose pass would take longer
 //! than `--max-pass-time` (the uniform grid on a teapot in a stadium) is
 //! priced from the part of the sample traced in that time (spread over the
-//! whole view, see [`crate::choose::probe_per_ray`]). Then [`crate::choose::choose`] runs as
+//! whole view, see [`accel::choose::probe_per_ray`]). Then [`accel::choose_with_probe`] runs as
 //! `render --accel auto` would, and its choice's total (from the same table,
 //! so that both sides share one measurement) is compared with the best.
 //! The chooser's own cost (its probe, less the winner's build) is reported
 //! beside it. On a shared machine, `--rounds` measures every candidate
 //! several times in interleaved rounds and keeps the fastest.
 
-use crate::accel::{AccelConfig, build_config, kdtree_preset, octree_preset};
-use crate::app::{load_scene, mesh_in};
-use crate::choose::{self, ProbeRay, brute_per_ray, probe_per_ray, view_probe};
-use crate::cli::threads_parser;
-use crate::output::PendingFile;
 use crate::tradeoff::{scene_list, short_name};
+use accel::choose::{self, ProbeRay, brute_per_ray, probe_per_ray};
+use accel::{AccelConfig, build_config, kdtree_preset, octree_preset};
 use accel_core::spawn::SpawnOffset;
 use anyhow::{Context, Result};
 use clap::Args;
+use render::app::{load_scene, mesh_in};
+use render::cli::threads_parser;
+use render::output::PendingFile;
+use render::probe::{ProbeShape, view_probe};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-/// Options of `render choose-bench`.
+/// Options of `studies choose-bench`.
 #[derive(Clone, Debug, Args)]
 pub struct ChooseBenchArgs {
     /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
@@ -118,13 +119,13 @@ pub fn candidates() -> Vec<AccelConfig> {
         .map(AccelConfig::grid)
         .collect();
     out.extend(
-        crate::accel::OCTREE_PRESETS
+        accel::OCTREE_PRESETS
             .iter()
             .filter_map(|p| octree_preset(p))
             .map(AccelConfig::Octree),
     );
     out.extend(
-        crate::accel::KDTREE_PRESETS
+        accel::KDTREE_PRESETS
             .iter()
             .filter_map(|p| kdtree_preset(p))
             .map(AccelConfig::KdTree),
@@ -133,7 +134,7 @@ pub fn candidates() -> Vec<AccelConfig> {
     out
 }
 
-/// `render choose-bench`.
+/// `studies choose-bench`.
 ///
 /// # Errors
 /// Every refusal, as one line naming the problem.
@@ -162,12 +163,12 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
             let (table, choice) = pool.install(|| -> Result<_> {
                 // Every structure answers alike: the sample is made with the
                 // octree, which no scene makes slow (the grid can be).
-                let octree = crate::accel::build(crate::accel::AccelKind::Octree, &mesh)?;
+                let octree = accel::build(accel::AccelKind::Octree, &mesh)?;
                 let sample: Vec<ProbeRay<f32>> = view_probe(
-                    octree.as_ref(),
+                    &octree,
                     &mesh,
                     &scene.view,
-                    choose::ProbeShape {
+                    ProbeShape {
                         width: budget.width,
                         height: budget.height,
                         ao: budget.ao,
@@ -192,8 +193,7 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                             let t = Instant::now();
                             let accel = build_config(config, &mesh)?;
                             let b = t.elapsed().as_secs_f64();
-                            let p =
-                                probe_per_ray(accel.as_ref(), &sample, max_pass, f64::INFINITY)?;
+                            let p = probe_per_ray(&accel, &sample, max_pass, f64::INFINITY)?;
                             (b, p.per_ray_s, p.rays)
                         };
                         best.0 = best.0.min(build_s);
@@ -210,12 +210,12 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                         (config, build_s, per, timed, build_s + rays as f64 * per)
                     })
                     .collect();
-                let choice = choose::choose(&mesh, rays, |a| {
+                let choice = accel::choose_with_probe(&mesh, rays, |a| {
                     view_probe(
                         a,
                         &mesh,
                         &scene.view,
-                        choose::ProbeShape {
+                        ProbeShape {
                             width: budget.width,
                             height: budget.height,
                             ao: budget.ao,

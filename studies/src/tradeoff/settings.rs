@@ -1,4 +1,4 @@
-//! The settings `render tradeoff` measures: one point per setting.
+//! The settings `studies tradeoff` measures: one point per setting.
 //!
 //! Two baselines (`f32`, watertight test, error-bound spawn; the grid and the
 //! kD-tree), then one dial turned at a time: precision, triangle test and
@@ -6,11 +6,11 @@
 //! presets of each accelerator, and the layout of the grid's cells and the
 //! kD-tree's leaves (memory against speed, same answers).
 
-use crate::accel::{AccelConfig, kdtree_preset, octree_preset};
-use crate::cli::Precision;
+use accel::KdTreeParams;
+use accel::{AccelConfig, kdtree_preset, octree_preset};
 use accel_core::TriangleTest;
 use accel_core::packed::Layout;
-use accel_kdtree::KdTreeParams;
+use render::cli::Precision;
 
 /// Where secondary rays start, precision-free.
 #[derive(Clone, Copy, Debug, PartialEq)]

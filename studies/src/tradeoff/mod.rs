@@ -1,4 +1,4 @@
-//! `render tradeoff SCENE`: every speed-against-accuracy dial, measured.
+//! `studies tradeoff SCENE`: every speed-against-accuracy dial, measured.
 //!
 //! For each [`settings::Setting`] (one point each): build time (median of up
 //! to `--repeats` builds), bytes, Mrays/s of the primary, shadow and diffuse
@@ -13,7 +13,7 @@
 //!   kD-tree, which is bit-for-bit equal to brute force (the workspace's
 //!   central invariant, checked by the test suites);
 //! - **leaks**: of `--leak-rays` rays aimed from outside at shared edges and
-//!   vertices of the scene's closed parts ([`leaks`]), the share that hit
+//!   vertices of the scene's closed parts ([`accel_scenes::aimed`]), the share that hit
 //!   nothing;
 //! - **self-hits**: of the shadow and diffuse (ambient-occlusion) rays, the
 //!   share whose nearest hit is the triangle they leave.
@@ -22,30 +22,29 @@
 //! against the summed error rates, one point per setting and a panel per
 //! scene, to `--plot`.
 
-pub mod leaks;
 pub mod settings;
 
-use crate::accel::build_config;
-use crate::app::{load_scene, mesh_in};
-use crate::bench::{self, RaySet};
-use crate::cli::{Precision, side_parser, threads_parser};
-use crate::output::PendingFile;
 use crate::plot::{Panel, Series, draw_panels};
-use crate::scene::Scene;
-use accel_core::gltf_scene::shared_scene_files;
-use accel_core::scenes::{GeneratedScene, random_rays};
+use accel::build_config;
 use accel_core::spawn::SpawnOffset;
 use accel_core::{
     Accelerator, MollerTrumboreMesh, PrimitiveSet, Ray, Real, TriangleMesh, TriangleTest,
 };
+use accel_scenes::gltf::shared_scene_files;
+use accel_scenes::{GeneratedScene, random_rays};
 use anyhow::{Context, Result};
 use clap::Args;
 use rayon::prelude::*;
+use render::app::{load_scene, mesh_in};
+use render::bench::{self, RaySet};
+use render::cli::{Precision, side_parser, threads_parser};
+use render::output::PendingFile;
+use render::scene::Scene;
 use settings::{Setting, Spawn, all_settings};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-/// Options of `render tradeoff`.
+/// Options of `studies tradeoff`.
 #[derive(Clone, Debug, Args)]
 pub struct TradeoffArgs {
     /// A .gltf/.glb file, a built-in scene name, a comma-separated list of
@@ -88,7 +87,7 @@ pub fn scene_list(arg: &str) -> Vec<String> {
     if arg != "all" {
         return arg.split(',').map(str::to_owned).collect();
     }
-    std::iter::once(crate::scene::DEFAULT_SCENE.to_owned())
+    std::iter::once(render::scene::DEFAULT_SCENE.to_owned())
         .chain(GeneratedScene::ALL.iter().map(|g| g.name().to_owned()))
         .chain(
             shared_scene_files()
@@ -175,11 +174,11 @@ fn reference(scene: &Scene, args: &TradeoffArgs) -> Result<Reference> {
     let rays: Vec<Ray<f64>> = primary.into_iter().chain(random).collect();
     let brute = mesh.triangle_count() as f64 * rays.len() as f64 <= BRUTE_REFERENCE_BUDGET;
     let kind = if brute {
-        crate::accel::AccelKind::Brute
+        accel::AccelKind::Brute
     } else {
-        crate::accel::AccelKind::KdTree
+        accel::AccelKind::KdTree
     };
-    let accel = crate::accel::build(kind, mesh)?;
+    let accel = accel::build(kind, mesh)?;
     let answers = rays
         .par_iter()
         .map(|r| accel.intersect(r).map(|h| h.map(|h| h.prim)))
@@ -188,7 +187,7 @@ fn reference(scene: &Scene, args: &TradeoffArgs) -> Result<Reference> {
     Ok(Reference {
         rays,
         answers,
-        leak_rays: leaks::leak_rays(mesh, args.leak_rays as usize, 0x1EA4),
+        leak_rays: accel_scenes::aimed::leak_rays(mesh, args.leak_rays as usize, 0x1EA4),
         how: if brute {
             "f64 brute force"
         } else {
@@ -205,12 +204,12 @@ fn thin<T: Copy>(v: &mut Vec<T>, max: usize) {
     }
 }
 
-/// `render tradeoff`: measures every setting on every scene named.
+/// `studies tradeoff`: measures every setting on every scene named.
 ///
 /// # Errors
 /// Every refusal, as one line naming the problem.
 pub fn run(args: &TradeoffArgs) -> Result<()> {
-    crate::app::check_png_name(&args.plot, "--plot")?;
+    render::app::check_png_name(&args.plot, "--plot")?;
     let csv_out = PendingFile::create(&args.csv)?;
     let plot_out = PendingFile::create(&args.plot)?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -305,7 +304,7 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         }
     }
     let accel = accel.expect("at least one build");
-    let accel = accel.as_ref();
+    let accel = accel.as_dyn();
     let offset = match s.spawn {
         Spawn::ErrorBound => SpawnOffset::ErrorBound,
         Spawn::Fixed(e) => SpawnOffset::Fixed(T::from_f64(e)),
@@ -542,7 +541,7 @@ mod tests {
 
     #[test]
     fn dials_show_their_costs_on_the_default_scene() {
-        let scene = crate::scene::default_scene().unwrap();
+        let scene = render::scene::default_scene().unwrap();
         let a = args();
         let r = reference(&scene, &a).unwrap();
         assert_eq!(r.rays.len(), 64);

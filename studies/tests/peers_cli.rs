@@ -1,10 +1,28 @@
-//! End-to-end runs of `render peers`: our accelerators always, the peers
+//! End-to-end runs of `studies peers`: our accelerators always, the peers
 //! when their features are enabled, the table, the JSON report, ray files.
 
-mod common;
-
-use common::{run, stdout};
 use serde_json::Value;
+use std::path::Path;
+use std::process::Output;
+
+/// Runs the `studies` binary with `args` in `dir`.
+fn run(dir: &Path, args: &[&str]) -> Output {
+    assert_cmd::cargo::cargo_bin_cmd!("studies")
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Standard output as text.
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Standard error as text.
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
 
 const FAST: [&str; 6] = ["--width", "12", "--height", "8", "--min-time", "0"];
 
@@ -12,11 +30,11 @@ const FAST: [&str; 6] = ["--width", "12", "--height", "8", "--min-time", "0"];
 fn run_fast(dir: &std::path::Path, args: &[&str]) -> String {
     let args: Vec<&str> = args.iter().chain(&FAST).copied().collect();
     let o = run(dir, &args);
-    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(o.status.success(), "{}", stderr(&o));
     stdout(&o)
 }
 
-/// `render peers default` with `args` and a tiny view in `dir`: its stdout
+/// `studies peers default` with `args` and a tiny view in `dir`: its stdout
 /// and its JSON report.
 fn peers_on_default(dir: &std::path::Path, args: &[&str]) -> (String, Value) {
     let args: Vec<&str> = ["peers", "default", "--json", "p.json"]
@@ -38,7 +56,9 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     }
     if !cfg!(feature = "peers") {
         assert!(
-            text.contains("not built in: obvhs, parry3d, bvh (build render with --features peers)"),
+            text.contains(
+                "not built in: obvhs, parry3d, bvh (build studies with --features peers)"
+            ),
             "{text}"
         );
     }
@@ -116,7 +136,7 @@ fn peers_measures_only_the_tools_named() {
     // A name that is no tool is refused, naming the choices.
     let o = run(dir.path(), &["peers", "default", "--tools", "grid,nope"]);
     assert!(!o.status.success());
-    let err = common::stderr(&o);
+    let err = stderr(&o);
     assert!(err.contains("nope") && err.contains("kdtree"), "{err}");
 }
 
@@ -127,9 +147,9 @@ fn peers_refuses_a_build_round_count_out_of_range() {
         let o = run(dir.path(), &["peers", "default", "--build-rounds", bad]);
         assert!(!o.status.success(), "{bad} accepted");
         assert!(
-            common::stderr(&o).contains("--build-rounds"),
+            stderr(&o).contains("--build-rounds"),
             "{bad}: {}",
-            common::stderr(&o)
+            stderr(&o)
         );
     }
 }
@@ -137,17 +157,14 @@ fn peers_refuses_a_build_round_count_out_of_range() {
 #[test]
 fn peers_traces_a_ray_file_and_chosen_kinds() {
     let dir = tempfile::tempdir().unwrap();
-    run_fast(
-        dir.path(),
-        &[
-            "bench",
-            "default",
-            "--write-rays",
-            "r.rays",
-            "--accel",
-            "grid",
-        ],
-    );
+    // A ray file as `render bench --write-rays` writes it.
+    let scene = render::scene::default_scene().unwrap();
+    let rays: Vec<accel_core::Ray<f32>> = accel_scenes::random_rays(&scene.mesh.bounds(), 96, 7);
+    std::fs::write(
+        dir.path().join("r.rays"),
+        accel_scenes::rayfile::encode(&rays),
+    )
+    .unwrap();
     let text = run_fast(dir.path(), &["peers", "default", "--rays", "r.rays"]);
     assert!(text.contains("rays (r.rays): file "), "{text}");
     let text = run_fast(dir.path(), &["peers", "default", "--kinds", "shadow"]);

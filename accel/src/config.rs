@@ -1,18 +1,19 @@
-//! The accelerators the binary knows, in one place.
+//! The structures by name, with their parameters and presets.
 //!
 //! Adding an accelerator means one [`AccelKind`] variant, its name, one
-//! [`AccelConfig`] variant and one arm of [`build_config`]. `--accel auto`
-//! asks [`crate::choose`].
+//! [`AccelConfig`] variant, one [`AnyAccelerator`] variant and one arm of
+//! [`build_config`]. [`crate::choose`] picks among them per scene.
 
+use crate::AnyAccelerator;
 use accel_core::packed::Layout;
-use accel_core::{Accelerator, BruteForce, BuildError, PrimitiveSet, Real};
+use accel_core::{BruteForce, BuildError, PrimitiveSet, Real};
 use accel_grid::{Grid, GridParams};
 use accel_kdtree::{KdTree, KdTreeParams};
 use accel_octree::{Octree, OctreeParams};
-use clap::ValueEnum;
 use std::fmt;
+use std::str::FromStr;
 
-/// An acceleration structure the binary can build.
+/// An acceleration structure [`build`] can build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum AccelKind {
     /// `accel_grid::Grid`: the uniform grid.
@@ -39,41 +40,18 @@ impl AccelKind {
             Self::Brute => "brute",
         }
     }
+
+    /// The kind called `name` ([`AccelKind::name`]: `grid`, `octree`,
+    /// `kdtree`, `brute`).
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
 }
 
 impl fmt::Display for AccelKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
-    }
-}
-
-/// What `--accel` accepts: a kind, or `auto`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum AccelChoice {
-    /// The uniform grid.
-    Grid,
-    /// The octree of nested grids.
-    Octree,
-    /// The SAH kD-tree.
-    Kdtree,
-    /// Brute force (the reference; slow on large scenes).
-    Brute,
-    /// Chosen per scene and ray budget (structure and parameters) from a
-    /// short probe of build and query cost; the reason is printed.
-    Auto,
-}
-
-impl AccelChoice {
-    /// The kind named, or `None` for `auto`.
-    #[must_use]
-    pub const fn kind(self) -> Option<AccelKind> {
-        match self {
-            Self::Grid => Some(AccelKind::Grid),
-            Self::Octree => Some(AccelKind::Octree),
-            Self::Kdtree => Some(AccelKind::KdTree),
-            Self::Brute => Some(AccelKind::Brute),
-            Self::Auto => None,
-        }
     }
 }
 
@@ -99,7 +77,7 @@ pub enum AccelError {
 pub fn build<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     kind: AccelKind,
     prims: &'a P,
-) -> Result<Box<dyn Accelerator<T> + 'a>, AccelError> {
+) -> Result<AnyAccelerator<'a, T, P>, AccelError> {
     build_config(&AccelConfig::default_for(kind), prims)
 }
 
@@ -111,7 +89,7 @@ pub fn build<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
 pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     config: &AccelConfig,
     prims: &'a P,
-) -> Result<Box<dyn Accelerator<T> + 'a>, AccelError> {
+) -> Result<AnyAccelerator<'a, T, P>, AccelError> {
     let kind = config.kind();
     let wrap = |cause| AccelError::Build { kind, cause };
     Ok(match config {
@@ -125,11 +103,15 @@ pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
                 parts: *parts,
                 ..GridParams::with_density(*density)
             };
-            Box::new(Grid::with_params(prims, &params).map_err(wrap)?)
+            AnyAccelerator::Grid(Grid::with_params(prims, &params).map_err(wrap)?)
         }
-        AccelConfig::Octree(p) => Box::new(Octree::with_params(prims, p).map_err(wrap)?),
-        AccelConfig::KdTree(p) => Box::new(KdTree::with_params(prims, p).map_err(wrap)?),
-        AccelConfig::Brute => Box::new(BruteForce::new(prims).map_err(wrap)?),
+        AccelConfig::Octree(p) => {
+            AnyAccelerator::Octree(Octree::with_params(prims, p).map_err(wrap)?)
+        }
+        AccelConfig::KdTree(p) => {
+            AnyAccelerator::KdTree(KdTree::with_params(prims, p).map_err(wrap)?)
+        }
+        AccelConfig::Brute => AnyAccelerator::Brute(BruteForce::new(prims).map_err(wrap)?),
     })
 }
 
@@ -288,6 +270,56 @@ impl fmt::Display for AccelConfig {
     }
 }
 
+/// A name [`AccelConfig::from_str`] does not know.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown accelerator {0:?}: expected grid [m=DENSITY], octree [{octree}], kdtree [{kdtree}] or brute",
+    octree = OCTREE_PRESETS.join("|"),
+    kdtree = KDTREE_PRESETS.join("|")
+)]
+pub struct UnknownAccel(pub String);
+
+impl FromStr for AccelKind {
+    type Err = UnknownAccel;
+
+    /// [`AccelKind::from_name`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::from_name(s.trim()).ok_or_else(|| UnknownAccel(s.to_owned()))
+    }
+}
+
+impl FromStr for AccelConfig {
+    type Err = UnknownAccel;
+
+    /// A structure by name with its default parameters (`grid`, `octree`,
+    /// `kdtree`, `brute`), a preset (`octree two-level`, `kdtree
+    /// fast-build`: [`OCTREE_PRESETS`], [`KDTREE_PRESETS`]), or a grid
+    /// density (`grid m=3`): the short forms of [`AccelConfig::label`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let unknown = || UnknownAccel(s.to_owned());
+        let mut words = s.split_whitespace();
+        let kind = AccelKind::from_name(words.next().ok_or_else(unknown)?).ok_or_else(unknown)?;
+        let config = match (kind, words.next()) {
+            (_, None) => Self::default_for(kind),
+            (AccelKind::Grid, Some(m)) => {
+                let density = m
+                    .strip_prefix("m=")
+                    .and_then(|d| d.parse::<f64>().ok())
+                    .filter(|d| d.is_finite() && *d > 0.0)
+                    .ok_or_else(unknown)?;
+                Self::grid(density)
+            }
+            (AccelKind::Octree, Some(p)) => Self::Octree(octree_preset(p).ok_or_else(unknown)?),
+            (AccelKind::KdTree, Some(p)) => Self::KdTree(kdtree_preset(p).ok_or_else(unknown)?),
+            (AccelKind::Brute, Some(_)) => return Err(unknown()),
+        };
+        if words.next().is_some() {
+            return Err(unknown());
+        }
+        Ok(config)
+    }
+}
+
 /// The octree presets by name.
 pub const OCTREE_PRESETS: [&str; 4] = ["default", "classic", "two-level", "grid-root"];
 /// The kD-tree presets by name.
@@ -346,8 +378,8 @@ fn kdtree_preset_name(p: &KdTreeParams) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use accel_core::scenes::uv_sphere;
-    use accel_core::{Ray, Vec3};
+    use accel_core::{Accelerator, Ray, Vec3};
+    use accel_scenes::uv_sphere;
 
     #[test]
     fn every_available_kind_builds_and_answers_like_brute_force() {
@@ -457,12 +489,12 @@ mod tests {
 
     #[test]
     fn moller_trumbore_equals_brute_force_in_every_accelerator() {
-        use crate::tradeoff::leaks::leak_rays;
-        use accel_core::scenes::{SplitMix64, random_rays};
         use accel_core::{MollerTrumboreMesh, TriangleMesh};
+        use accel_scenes::aimed::leak_rays;
+        use accel_scenes::{SplitMix64, random_rays};
         // Closed shapes (shared edges and vertices to aim at) and a soup.
         let mut mesh = uv_sphere(Vec3::new(0.2, 0.1, -0.3), 1.0, 3_000);
-        mesh.append(&accel_core::scenes::torus(
+        mesh.append(&accel_scenes::torus(
             Vec3::new(2.5, 0.0, 0.0),
             1.0,
             0.3,
@@ -470,8 +502,7 @@ mod tests {
             16,
         ))
         .unwrap();
-        mesh.append(&accel_core::scenes::random_soup(500, 4))
-            .unwrap();
+        mesh.append(&accel_scenes::random_soup(500, 4)).unwrap();
         let mut rays: Vec<Ray<f64>> = leak_rays(&mesh, 3_000, 9);
         rays.extend(random_rays::<f64>(&mesh.bounds(), 1_000, 2));
         let mut rng = SplitMix64::new(1);
@@ -522,12 +553,38 @@ mod tests {
     }
 
     #[test]
-    fn choices_name_their_kinds() {
-        assert_eq!(AccelChoice::Kdtree.kind(), Some(AccelKind::KdTree));
-        assert_eq!(AccelChoice::Auto.kind(), None);
+    fn names_and_presets_parse_back() {
         for k in AccelKind::ALL {
-            let parsed = AccelChoice::from_str(k.name(), false).unwrap();
-            assert_eq!(parsed.kind(), Some(k));
+            assert_eq!(AccelKind::from_name(k.name()), Some(k));
+            assert_eq!(
+                k.name().parse::<AccelConfig>(),
+                Ok(AccelConfig::default_for(k))
+            );
+        }
+        for name in OCTREE_PRESETS {
+            let c: AccelConfig = format!("octree {name}").parse().unwrap();
+            assert_eq!(c, AccelConfig::Octree(octree_preset(name).unwrap()));
+        }
+        for name in KDTREE_PRESETS {
+            let c: AccelConfig = format!("kdtree {name}").parse().unwrap();
+            assert_eq!(c, AccelConfig::KdTree(kdtree_preset(name).unwrap()));
+            // A preset's label parses back to it.
+            assert_eq!(c.label().parse::<AccelConfig>(), Ok(c));
+        }
+        assert_eq!(
+            "grid m=3".parse::<AccelConfig>(),
+            Ok(AccelConfig::grid(3.0))
+        );
+        for bad in [
+            "",
+            "bvh",
+            "grid m=0",
+            "grid m=x",
+            "octree fast",
+            "brute x",
+            "kdtree pbrt x",
+        ] {
+            assert!(bad.parse::<AccelConfig>().is_err(), "{bad:?}");
         }
     }
 }

@@ -6,10 +6,9 @@
 //! generator is [`SplitMix64`], whose sequence is specified, rather than a
 //! crate whose value streams may change between releases).
 
-use crate::{Aabb, Ray, Real, TriangleMesh, Vec3};
+use crate::camera::{Camera, Z_UP};
+use accel_core::{Aabb, Ray, Real, TriangleMesh, Vec3};
 use core::f64::consts::{PI, TAU};
-
-pub mod driver;
 
 /// SplitMix64 (Steele, Lea & Flood 2014): a tiny, fully specified generator.
 #[derive(Clone, Debug)]
@@ -280,7 +279,7 @@ pub fn teapot_in_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
 /// A sphere of about `dense` triangles of radius 1 at the origin, inside a
 /// box of side `stadium` whose faces are tiled `tiles × tiles`: with fine
 /// tiles (20 for a box 10⁴ wide) no triangle is large enough for the scene
-/// to be built in parts ([`crate::parts`]), so one structure must isolate
+/// to be built in parts ([`accel_core::parts`]), so one structure must isolate
 /// the sphere.
 #[must_use]
 pub fn sphere_in_tiled_box(dense: usize, stadium: f64, tiles: u32) -> TriangleMesh<f64> {
@@ -458,7 +457,7 @@ impl GeneratedScene {
                 Vec3::new(0.0, 0.0, 1.0),
                 60.0,
             ),
-            _ => Camera::frame(&self.mesh_bounds(), Camera::DEFAULT_SIDE),
+            _ => Camera::frame(&self.mesh_bounds(), Camera::DEFAULT_SIDE, Z_UP),
         }
     }
 
@@ -468,93 +467,6 @@ impl GeneratedScene {
             Self::Soup100k => Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)),
             _ => self.mesh().bounds(),
         }
-    }
-}
-
-/// A pinhole camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Eye position.
-    pub eye: Vec3<f64>,
-    /// Unit view direction.
-    pub forward: Vec3<f64>,
-    /// Unit right vector.
-    pub right: Vec3<f64>,
-    /// Unit up vector (orthogonal to `forward` and `right`).
-    pub up: Vec3<f64>,
-    /// Vertical field of view, radians.
-    pub vfov: f64,
-}
-
-impl Camera {
-    /// A camera at `eye` looking at `target`; `up` need not be orthogonal.
-    #[must_use]
-    pub fn look_at(eye: Vec3<f64>, target: Vec3<f64>, up: Vec3<f64>, vfov_degrees: f64) -> Self {
-        let forward = (target - eye).normalized();
-        let mut right = forward.cross(up);
-        if right.length_squared() < 1e-24 {
-            // Looking along `up`: any perpendicular will do.
-            right = forward.cross(Vec3::new(up.y, up.z, up.x));
-        }
-        let right = right.normalized();
-        let up = right.cross(forward);
-        Self {
-            eye,
-            forward,
-            right,
-            up,
-            vfov: vfov_degrees.to_radians(),
-        }
-    }
-
-    /// The direction from which [`Camera::frame`] shows most scenes: the
-    /// generated ones but the terrain and the teapot in a stadium, and the
-    /// glTF files of the examples and tests.
-    pub const DEFAULT_SIDE: Vec3<f64> = Vec3::new(1.0, -1.6, 0.9);
-
-    /// A camera looking at the center of `b` from direction `from` (z up),
-    /// far enough that the whole box fits a 45° view.
-    #[must_use]
-    pub fn frame(b: &Aabb<f64>, from: Vec3<f64>) -> Self {
-        let center = b.center();
-        let radius = (b.diagonal().length() * 0.5).max(1e-300);
-        let vfov: f64 = 45.0;
-        let distance = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
-        Self::look_at(
-            center + from.normalized() * distance,
-            center,
-            Vec3::new(0.0, 0.0, 1.0),
-            vfov,
-        )
-    }
-
-    /// The ray through image position `(x, y)` in pixels of a `width × height`
-    /// image (`(0, 0)` top left; pixel centers at `+0.5`).
-    #[must_use]
-    pub fn ray_through<T: Real>(&self, x: f64, y: f64, width: u32, height: u32) -> Ray<T> {
-        let aspect = f64::from(width) / f64::from(height);
-        let h = (self.vfov * 0.5).tan();
-        let sx = (2.0 * x / f64::from(width) - 1.0) * h * aspect;
-        let sy = (1.0 - 2.0 * y / f64::from(height)) * h;
-        let d = self.forward + self.right * sx + self.up * sy;
-        Ray {
-            origin: self.eye.cast(),
-            direction: d.cast(),
-            t_min: T::ZERO,
-            t_max: T::INFINITY,
-        }
-    }
-
-    /// One ray through the center of every pixel, row by row.
-    #[must_use]
-    pub fn rays<T: Real>(&self, width: u32, height: u32) -> Vec<Ray<T>> {
-        (0..height)
-            .flat_map(|y| {
-                (0..width).map(move |x| {
-                    self.ray_through(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height)
-                })
-            })
-            .collect()
     }
 }
 
@@ -577,7 +489,7 @@ pub fn random_rays<T: Real>(b: &Aabb<f64>, n: usize, seed: u64) -> Vec<Ray<T>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Accelerator, BruteForce, PrimitiveSet};
+    use accel_core::PrimitiveSet;
 
     #[test]
     fn every_scene_is_found_by_its_name_and_nothing_else_is() {
@@ -669,16 +581,5 @@ mod tests {
             let n = (p1 - p0).cross(p2 - p0);
             assert!(n.dot(p0 - c) > 0.0, "triangle {i} faces inward");
         }
-    }
-
-    #[test]
-    fn camera_center_ray_hits_the_framed_sphere() {
-        let m = uv_sphere(Vec3::new(5.0, 0.0, 0.0), 2.0, 500);
-        let cam = Camera::frame(&m.bounds(), Vec3::new(0.0, -1.0, 0.0));
-        let brute = BruteForce::new(&m).unwrap();
-        let r: Ray<f64> = cam.ray_through(50.0, 50.0, 100, 100);
-        assert!(brute.intersect(&r).unwrap().is_some());
-        let corner: Ray<f64> = cam.ray_through(0.0, 0.0, 100, 100);
-        assert!(brute.intersect(&corner).unwrap().is_none());
     }
 }

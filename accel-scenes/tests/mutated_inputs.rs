@@ -5,11 +5,11 @@
 //! scene or ray list, or an error naming the file. The cases are bounded
 //! (`PROPTEST_CASES` scales them) so that this runs with every test run.
 
-use accel_core::gltf_scene::load;
 use accel_core::{Ray, Vec3};
+use accel_scenes::gltf::load;
+use accel_scenes::rayfile;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
-use render::rayfile;
 use serde_json::Value;
 use std::path::Path;
 

@@ -1,18 +1,18 @@
 //! PNG charts for the measurement commands, drawn with `plotters` and
-//! labelled with the crate's own bitmap font ([`crate::font`]).
+//! labelled with the crate's own bitmap font ([`render::font`]).
 //!
 //! `plotters`' text needs a font engine (its `ttf` feature loads system fonts
 //! through fontconfig). [`FontBackend`] wraps the bitmap backend and draws
 //! every label, tick and caption with the 5×7 font instead, so charts render
 //! identically on a machine without any font installed.
 
-use crate::font::{ADVANCE, GLYPH_H, GLYPH_W, glyph};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters_backend::text_anchor::{HPos, VPos};
 use plotters_backend::{
     BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind, FontTransform,
 };
+use render::font::{ADVANCE, GLYPH_H, GLYPH_W, glyph};
 
 type BitmapError = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
 

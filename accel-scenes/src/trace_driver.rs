@@ -1,10 +1,11 @@
 //! What the profiling examples share (`accel-grid`'s `trace`, `accel-octree`'s
-//! `trace_octree`): the command line `[SCENE] [camera|random] [RAYS]`, the
+//! `trace_octree`): the arguments `[SCENE] [camera|random] [RAYS]`, the
 //! scene in `f32`, its rays, and a one-thread trace that prints throughput
-//! and work per ray.
+//! and work per ray. The examples pass their own command line
+//! (`std::env::args().skip(1)`); the library never reads it.
 
-use super::{GeneratedScene, random_rays};
-use crate::{Accelerator, Ray, TraversalCounters, TriangleMesh};
+use crate::{GeneratedScene, random_rays};
+use accel_core::{Accelerator, Ray, TraversalCounters, TriangleMesh};
 use std::time::Instant;
 
 /// A generated scene in `f32` and what to trace through it.
@@ -20,16 +21,19 @@ pub struct TraceDriver {
 }
 
 impl TraceDriver {
-    /// From the process arguments `[SCENE] [camera|random] [RAYS]`
-    /// (defaults: `default_scene`, camera, 65,536).
+    /// From the arguments `[SCENE] [camera|random] [RAYS]`, program name
+    /// excluded (defaults: `default_scene`, camera, 65,536).
     ///
     /// # Errors
     /// A message naming an unknown scene and the known ones.
-    pub fn from_args(default_scene: &str) -> Result<Self, String> {
-        let args: Vec<String> = std::env::args().collect();
-        let name = args.get(1).map_or(default_scene, String::as_str);
-        let kind = args.get(2).map_or("camera", String::as_str).to_owned();
-        let count = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(65_536);
+    pub fn from_args<I: IntoIterator<Item = String>>(
+        args: I,
+        default_scene: &str,
+    ) -> Result<Self, String> {
+        let args: Vec<String> = args.into_iter().collect();
+        let name = args.first().map_or(default_scene, String::as_str);
+        let kind = args.get(1).map_or("camera", String::as_str).to_owned();
+        let count = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(65_536);
         let scene = GeneratedScene::from_name(name).ok_or_else(|| {
             format!(
                 "unknown scene {name}; expected one of sphere_100k, soup_100k, terrain_1m, teapot_in_stadium"

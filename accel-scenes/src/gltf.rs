@@ -11,7 +11,8 @@
 //! view and buffer) before they are read, and a node hierarchy with a cycle
 //! is refused. Skins and morph targets are ignored (the rest pose is used).
 
-use crate::{MeshError, TriangleMesh, Vec3};
+use accel_core::glam;
+use accel_core::{MeshError, TriangleMesh, Vec3};
 use std::path::{Path, PathBuf};
 
 /// Why a glTF file could not be loaded.

@@ -1,0 +1,140 @@
+//! A pinhole camera and the one framing rule of the workspace.
+//!
+//! [`Camera`] is the classic pinhole model (eye, orthonormal basis, vertical
+//! field of view; pixel centres at `+0.5`), as in pbrt's perspective camera
+//! without lens. [`Camera::frame`] points one at a box from a direction.
+
+use accel_core::{Aabb, Ray, Real, Vec3};
+
+/// The up direction of the generated scenes (z up).
+pub const Z_UP: Vec3<f64> = Vec3::new(0.0, 0.0, 1.0);
+/// The up direction of glTF files (y up).
+pub const Y_UP: Vec3<f64> = Vec3::new(0.0, 1.0, 0.0);
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3<f64>,
+    /// Unit view direction.
+    pub forward: Vec3<f64>,
+    /// Unit right vector.
+    pub right: Vec3<f64>,
+    /// Unit up vector (orthogonal to `forward` and `right`).
+    pub up: Vec3<f64>,
+    /// Vertical field of view, radians.
+    pub vfov: f64,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`; `up` need not be orthogonal.
+    #[must_use]
+    pub fn look_at(eye: Vec3<f64>, target: Vec3<f64>, up: Vec3<f64>, vfov_degrees: f64) -> Self {
+        let forward = (target - eye).normalized();
+        let mut right = forward.cross(up);
+        if right.length_squared() < 1e-24 {
+            // Looking along `up`: any perpendicular will do.
+            right = forward.cross(Vec3::new(up.y, up.z, up.x));
+        }
+        let right = right.normalized();
+        let up = right.cross(forward);
+        Self {
+            eye,
+            forward,
+            right,
+            up,
+            vfov: vfov_degrees.to_radians(),
+        }
+    }
+
+    /// The direction from which [`Camera::frame`] shows most scenes: the
+    /// generated ones but the terrain and the teapot in a stadium, and the
+    /// glTF files of the examples and tests.
+    pub const DEFAULT_SIDE: Vec3<f64> = Vec3::new(1.0, -1.6, 0.9);
+
+    /// A camera looking at the centre of `b` from direction `from`, with
+    /// `up` as its up direction ([`Z_UP`] for the generated scenes, [`Y_UP`]
+    /// for glTF), far enough that the whole box fits a 45° view. A box that
+    /// is a single point gets a small sensible distance instead.
+    ///
+    /// The one framing of the workspace: `render`'s automatic cameras, the
+    /// generated scenes' default view and the benchmarks' views all use it.
+    #[must_use]
+    pub fn frame(b: &Aabb<f64>, from: Vec3<f64>, up: Vec3<f64>) -> Self {
+        let center = b.center();
+        let mut radius = b.diagonal().length() * 0.5;
+        if !(radius > 0.0) {
+            // A single point: any sensible distance will do.
+            radius = (center.abs().max_component() * 1e-3).max(1.0);
+        }
+        let vfov: f64 = 45.0;
+        let distance = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
+        Self::look_at(center + from.normalized() * distance, center, up, vfov)
+    }
+
+    /// The ray through image position `(x, y)` in pixels of a `width × height`
+    /// image (`(0, 0)` top left; pixel centers at `+0.5`).
+    #[must_use]
+    pub fn ray_through<T: Real>(&self, x: f64, y: f64, width: u32, height: u32) -> Ray<T> {
+        let aspect = f64::from(width) / f64::from(height);
+        let h = (self.vfov * 0.5).tan();
+        let sx = (2.0 * x / f64::from(width) - 1.0) * h * aspect;
+        let sy = (1.0 - 2.0 * y / f64::from(height)) * h;
+        let d = self.forward + self.right * sx + self.up * sy;
+        Ray {
+            origin: self.eye.cast(),
+            direction: d.cast(),
+            t_min: T::ZERO,
+            t_max: T::INFINITY,
+        }
+    }
+
+    /// One ray through the center of every pixel, row by row.
+    #[must_use]
+    pub fn rays<T: Real>(&self, width: u32, height: u32) -> Vec<Ray<T>> {
+        (0..height)
+            .flat_map(|y| {
+                (0..width).map(move |x| {
+                    self.ray_through(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height)
+                })
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::uv_sphere;
+    use accel_core::{Accelerator, BruteForce};
+
+    #[test]
+    fn camera_center_ray_hits_the_framed_sphere() {
+        let m = uv_sphere(Vec3::new(5.0, 0.0, 0.0), 2.0, 500);
+        let cam = Camera::frame(&m.bounds(), Vec3::new(0.0, -1.0, 0.0), Z_UP);
+        let brute = BruteForce::new(&m).unwrap();
+        let r: Ray<f64> = cam.ray_through(50.0, 50.0, 100, 100);
+        assert!(brute.intersect(&r).unwrap().is_some());
+        let corner: Ray<f64> = cam.ray_through(0.0, 0.0, 100, 100);
+        assert!(brute.intersect(&corner).unwrap().is_none());
+    }
+
+    #[test]
+    fn framing_sees_the_whole_box() {
+        let b = Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 4.0));
+        let cam = Camera::frame(&b, Vec3::new(0.0, 0.0, 1.0), Y_UP);
+        let to_center = (b.center() - cam.eye).normalized();
+        assert!((to_center.dot(cam.forward) - 1.0).abs() < 1e-12);
+        // Every corner lies within the vertical half-angle of the view axis.
+        for i in 0..8 {
+            let d = (b.corner(i) - cam.eye).normalized();
+            assert!(d.dot(cam.forward) > (cam.vfov * 0.5).cos(), "corner {i}");
+        }
+        let point = Aabb::from_point(Vec3::new(5.0, 5.0, 5.0));
+        assert!(
+            Camera::frame(&point, Vec3::new(1.0, 1.0, 1.0), Y_UP)
+                .eye
+                .is_finite()
+        );
+    }
+}

@@ -1,0 +1,43 @@
+//! The command line: `studies <SUBCOMMAND> [options]`. Each subcommand's
+//! options are its own module's (`TradeoffArgs` in [`crate::tradeoff`], and
+//! so on); this only names them.
+
+use clap::{Parser, Subcommand};
+
+/// The workspace's studies: speed against accuracy, the grid density
+/// sweep, the chooser's check, and the peers.
+///
+/// SCENE is a `.gltf`/`.glb` file or a built-in scene, as for `render`:
+/// `default`, `sphere_100k`, `soup_100k`, `terrain_1m`,
+/// `teapot_in_stadium`, `flat_field`.
+#[derive(Debug, Parser)]
+#[command(name = "studies", version, after_help = EXAMPLES)]
+pub struct Cli {
+    /// The study to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+const EXAMPLES: &str = "\
+Examples:
+  studies tradeoff all --csv docs/tradeoff.csv --plot docs/tradeoff.png
+  studies sweep-density all --plot docs/sweep-density.png
+  studies choose-bench all
+  studies peers terrain_1m                 (peers: cargo run --release -p studies --features peers,embree)";
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Measure every speed-against-accuracy dial: throughput, build time,
+    /// memory, mismatches, leaks and self-intersections per setting.
+    Tradeoff(crate::tradeoff::TradeoffArgs),
+    /// Sweep the grid density m: Mrays/s and build time against cells per object.
+    SweepDensity(crate::sweep::SweepArgs),
+    /// Run every accelerator on every scene and compare `render --accel
+    /// auto`'s choice with the best (total time: build + rays).
+    ChooseBench(crate::choose_bench::ChooseBenchArgs),
+    /// Run our accelerators and the peers (obvhs, parry3d, bvh with
+    /// `--features peers`; Embree 3 with `--features embree`) on the same
+    /// scene and rays on one thread: Mrays/s, ratios, build times, agreement.
+    Peers(crate::peers::run::PeersArgs),
+}
