@@ -2,9 +2,9 @@
 //! any work, counted as the build goes, never passed by a tree it returns.
 
 use accel_core::packed::Layout;
-use accel_scenes::{SplitMix64, random_soup};
 use accel_core::{Accelerator, BuildError, Real, TriangleMesh, Vec3};
 use accel_kdtree::{KdTree, KdTreeParams};
+use accel_scenes::{SplitMix64, random_soup};
 use proptest::prelude::*;
 
 fn with_budget(max_bytes: u64, layout: Layout) -> KdTreeParams {
