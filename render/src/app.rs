@@ -9,7 +9,9 @@ use crate::bench::{self, BenchReport, RayKind, RaySet, SetInfo};
 use crate::cli::{self, BenchArgs, Precision, RenderArgs};
 use crate::heatmap::heat_map;
 use crate::output::PendingFile;
+use crate::part_io;
 use crate::probe::{ProbeShape, view_probe};
+use crate::shard::Shard;
 use accel::choose::{self, ProbeRay};
 use accel::{AccelConfig, AccelKind};
 
@@ -194,7 +196,11 @@ fn check_bench_memory(args: &BenchArgs) -> Result<()> {
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     cli::check_render_totals(args).map_err(anyhow::Error::msg)?;
     check_render_memory(args)?;
-    check_png_name(&args.out, "--out")?;
+    let shard = args.shard.resolve()?;
+    match shard {
+        None => check_png_name(&args.out, "--out")?,
+        Some(s) => part_io::check_render_shard(s, args)?,
+    }
     if let Some(h) = &args.heatmap {
         check_png_name(h, "--heatmap")?;
     }
@@ -217,23 +223,24 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     }
     let scene = load_scene(scene_arg)?;
     match args.precision {
-        Precision::F32 => render_in::<f32>(args, &scene, out, heat_out),
-        Precision::F64 => render_in::<f64>(args, &scene, out, heat_out),
+        Precision::F32 => render_in::<f32>(args, &scene, shard, out, heat_out),
+        Precision::F64 => render_in::<f64>(args, &scene, shard, out, heat_out),
     }
 }
 
 fn render_in<T: Real>(
     args: &RenderArgs,
     scene: &Scene,
+    shard: Option<Shard>,
     out: PendingFile,
     heat_out: Option<PendingFile>,
 ) -> Result<()> {
     let mesh = mesh_in::<T>(scene)?;
     match args.dials.triangle_test.test() {
-        TriangleTest::Watertight => render_with(args, scene, &mesh, &mesh, out, heat_out),
+        TriangleTest::Watertight => render_with(args, scene, &mesh, &mesh, shard, out, heat_out),
         TriangleTest::MollerTrumbore => {
             let fast = MollerTrumboreMesh::new(&mesh);
-            render_with(args, scene, &mesh, &fast, out, heat_out)
+            render_with(args, scene, &mesh, &fast, shard, out, heat_out)
         }
     }
 }
@@ -248,6 +255,7 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     scene: &Scene,
     mesh: &TriangleMesh<T>,
     prims: &P,
+    shard: Option<Shard>,
     out: PendingFile,
     heat_out: Option<PendingFile>,
 ) -> Result<()> {
@@ -297,6 +305,9 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let bar = progress_bar(u64::from(w) * u64::from(h), "render");
     let start = Instant::now();
     let pixels = for_each_pixel(w, h, &bar, |x, y| {
+        if shard.is_some_and(|s| !s.owns_row(y)) {
+            return Ok(Pixel::default());
+        }
         shader.pixel(x, y).map_err(|e| {
             let hint = match e {
                 QueryError::OriginOutOfRange { .. } => precision_hint::<T>(),
@@ -317,7 +328,10 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         .flat_map(|p: &Pixel| p.rgb.map(to_srgb8))
         .collect();
     let dest = out.dest().display().to_string();
-    out.write_png(w, h, &rgb)?;
+    match shard {
+        None => out.write_png(w, h, &rgb)?,
+        Some(s) => out.write_all(&part_io::render_part(s, args, scene, &rgb))?,
+    }
     println!("wrote {dest}");
     if let Some(heat_out) = heat_out {
         let work: Vec<_> = pixels.iter().map(|p| p.primary_work).collect();
@@ -391,11 +405,36 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         .as_deref()
         .map(PendingFile::create)
         .transpose()?;
-    let file_rays = args
+    let shard = args.shard.resolve()?;
+    let hits_out = part_io::hits_output(args, shard)?;
+    let mut file_rays = args
         .rays
         .as_deref()
         .map(accel_scenes::rayfile::read)
         .transpose()?;
+    // A shard traces its slice; the header keeps the whole file's count and
+    // digest, so the parts of one file merge and no other's do.
+    let mut slice = None;
+    if let Some(rays) = &mut file_rays {
+        let mut digest = crate::shard::Fnv::default();
+        for r in rays.iter() {
+            for c in [r.origin, r.direction] {
+                for v in [c.x, c.y, c.z] {
+                    digest = digest.update(&v.to_bits().to_le_bytes());
+                }
+            }
+            digest = digest.update(&r.t_min.to_bits().to_le_bytes());
+            digest = digest.update(&r.t_max.to_bits().to_le_bytes());
+        }
+        let total = rays.len();
+        let range = shard.map_or(0..total, |s| s.ray_range(total));
+        *rays = rays[range.clone()].to_vec();
+        slice = Some(HitsSlice {
+            first: range.start,
+            total: total as u64,
+            rays_digest: digest.finish(),
+        });
+    }
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
@@ -409,6 +448,9 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         rays_out,
         file_rays,
         threads,
+        hits_out,
+        shard,
+        slice,
     };
     pool.install(|| match args.precision {
         Precision::F32 => bench_in::<f32>(args, &scene, io),
@@ -422,6 +464,20 @@ struct BenchIo {
     rays_out: Option<PendingFile>,
     file_rays: Option<Vec<accel_core::Ray<f32>>>,
     threads: usize,
+    /// Where `--hits` goes, for this shard (if any) of the file's rays.
+    hits_out: Option<PendingFile>,
+    shard: Option<Shard>,
+    slice: Option<HitsSlice>,
+}
+
+/// Which rays of a ray file a bench traces.
+struct HitsSlice {
+    /// The index in the file of the first ray traced.
+    first: usize,
+    /// The file's ray count.
+    total: u64,
+    /// FNV-1a of the file's rays.
+    rays_digest: u64,
 }
 
 fn bench_in<T: Real>(args: &BenchArgs, scene: &Scene, io: BenchIo) -> Result<()> {
@@ -519,6 +575,36 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
             println!("{row}");
         }
         results.push(r);
+    }
+    if let (Some(out), Some(slice), Some(config)) = (io.hits_out, &io.slice, configs.first()) {
+        let accel = accel::build_config(config, prims)?;
+        let job = part_io::job_settings(
+            "bench hits",
+            &[
+                format!("precision: {}", T::NAME),
+                format!("accel: {:?}", args.accel),
+            ],
+            &args.dials,
+        );
+        let digest = part_io::scene_digest(scene)
+            .update(&slice.rays_digest.to_le_bytes())
+            .finish();
+        let bytes = part_io::hits_bytes(
+            accel.as_dyn(),
+            &sets[0].rays,
+            slice.first,
+            job,
+            digest,
+            io.shard.map(|s| (s, slice.total)),
+        )?;
+        let dest = out.dest().display().to_string();
+        out.write_all(&bytes)?;
+        println!(
+            "wrote the hits of rays {}..{} ({}) to {dest}",
+            slice.first,
+            slice.first + sets[0].rays.len(),
+            config.label()
+        );
     }
     let disagreement = bench::disagreement(&results);
     let report = BenchReport {

@@ -3,6 +3,7 @@
 //! Every numeric option has a range checked by clap, so absurd sizes are
 //! refused before any work starts (see [`limits`]).
 
+use crate::shard::Shard;
 use accel::{
     AccelConfig, AccelKind, GRID_LAYOUT, KDTREE_PRESETS, OCTREE_PRESETS, kdtree_preset,
     octree_preset,
@@ -91,6 +92,8 @@ Examples:
   render teapot_in_stadium --heatmap=heat.png
   render bench soup_100k --json soup.json
   render bench scene.glb --rays rays.bin --accel grid,brute
+  render scene.glb --shard 0/4 --out part-0.part   one of 4 shards (docs/cluster.md)
+  render merge part-*.part --out scene.png
 
 The studies (tradeoff, sweep-density, choose-bench, peers) are the studies binary:
   cargo run --release -p studies -- --help";
@@ -100,6 +103,49 @@ The studies (tradeoff, sweep-density, choose-bench, peers) are the studies binar
 pub enum Command {
     /// Measure build time, memory and Mrays/s per accelerator and ray kind.
     Bench(Box<BenchArgs>),
+    /// Join the part files of a sharded render (`--shard`) into the image,
+    /// or of a sharded ray file (`bench --hits`) into the hits file.
+    Merge(MergeArgs),
+}
+
+/// Options of `render merge`.
+#[derive(Clone, Debug, Args)]
+pub struct MergeArgs {
+    /// The part files, in any order: every shard of one job exactly once.
+    #[arg(value_name = "PARTS", required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The merged output: a PNG for image parts, a hits file for hits parts.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+}
+
+/// Which shard of a job array this process runs (docs/cluster.md).
+#[derive(Clone, Debug, Default, Args)]
+pub struct ShardArgs {
+    /// Run shard I of N (0-based) and write a part file (`--out NAME.part`)
+    /// for `render merge`: the image rows in every N-th band of 16 rows
+    /// from band I, or the I-th of N contiguous slices of a ray file.
+    #[arg(long, value_name = "I/N", conflicts_with = "shards")]
+    pub shard: Option<Shard>,
+    /// Run one of N shards, its index read from the job array's
+    /// environment: JOB_COMPLETION_INDEX (Kubernetes Indexed Jobs), then
+    /// SLURM_ARRAY_TASK_ID (Slurm `--array=0-(N-1)`).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::shard::MAX_SHARDS)))]
+    pub shards: Option<u32>,
+}
+
+impl ShardArgs {
+    /// The shard this process runs, if any.
+    ///
+    /// # Errors
+    /// When `--shards` is given and the environment holds no valid index.
+    pub fn resolve(&self) -> Result<Option<Shard>, crate::shard::ShardError> {
+        match (self.shard, self.shards) {
+            (Some(s), _) => Ok(Some(s)),
+            (None, Some(n)) => Shard::from_env(n, |k| std::env::var(k).ok()).map(Some),
+            (None, None) => Ok(None),
+        }
+    }
 }
 
 /// Floating-point precision of the geometry, rays and queries.
@@ -170,6 +216,9 @@ pub struct RenderArgs {
     /// figure, before any work.
     #[arg(long, value_name = "GIB", default_value_t = limits::MEMORY_BUDGET_GIB, value_parser = memory_budget_parser, allow_negative_numbers = true)]
     pub memory_budget: f64,
+    /// One shard of the image, for a job array.
+    #[command(flatten)]
+    pub shard: ShardArgs,
     /// The speed-against-accuracy dials.
     #[command(flatten)]
     pub dials: DialArgs,
@@ -216,6 +265,14 @@ pub struct BenchArgs {
     /// bounded by their file instead.
     #[arg(long, value_name = "GIB", default_value_t = limits::MEMORY_BUDGET_GIB, value_parser = memory_budget_parser, allow_negative_numbers = true)]
     pub memory_budget: f64,
+    /// Write the nearest hit of every ray of `--rays` (found by the first
+    /// accelerator of `--accel`) to this file: a hits file, or with
+    /// `--shard`/`--shards` the part file of this shard's slice of the rays.
+    #[arg(long, value_name = "FILE", requires = "rays")]
+    pub hits: Option<PathBuf>,
+    /// One slice of the ray file, for a job array (needs `--hits`).
+    #[command(flatten)]
+    pub shard: ShardArgs,
     /// The speed-against-accuracy dials.
     #[command(flatten)]
     pub dials: DialArgs,

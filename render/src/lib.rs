@@ -31,6 +31,7 @@ pub mod cli;
 pub mod font;
 pub mod heatmap;
 pub mod output;
+pub mod part_io;
 pub mod probe;
 pub mod report;
 pub mod scene;

@@ -20,6 +20,7 @@ fn main() -> ExitCode {
     };
     let result = match &cli.command {
         Some(Command::Bench(args)) => render::app::run_bench(args),
+        Some(Command::Merge(args)) => render::part_io::run_merge(args),
         None => render::app::run_render(&cli.render),
     };
     match result {

@@ -150,6 +150,24 @@ fn list(indices: &[u32]) -> String {
     }
 }
 
+/// The `; `-separated items of two settings strings that differ, each
+/// side's joined by `, ` (the whole strings if none differ item by item).
+fn differing_items(theirs: &str, ours: &str) -> (String, String) {
+    let (a, b): (Vec<&str>, Vec<&str>) = (theirs.split("; ").collect(), ours.split("; ").collect());
+    let only = |x: &[&str], y: &[&str]| -> Vec<String> {
+        x.iter()
+            .filter(|i| !y.contains(i))
+            .map(|i| (*i).to_owned())
+            .collect()
+    };
+    let (ta, ob) = (only(&a, &b), only(&b, &a));
+    if ta.is_empty() && ob.is_empty() {
+        (theirs.to_owned(), ours.to_owned())
+    } else {
+        (ta.join(", "), ob.join(", "))
+    }
+}
+
 impl FromStr for Shard {
     type Err = ShardError;
 
@@ -472,7 +490,10 @@ pub fn merge(parts: &[Part]) -> Result<Merged, ShardError> {
             ("height", h.height.to_string(), f.height.to_string()),
             ("ray count", h.rays.to_string(), f.rays.to_string()),
         ];
-        if let Some((field, theirs, ours)) = fields.into_iter().find(|(_, a, b)| a != b) {
+        if let Some((field, mut theirs, mut ours)) = fields.into_iter().find(|(_, a, b)| a != b) {
+            if field == "settings" {
+                (theirs, ours) = differing_items(&theirs, &ours);
+            }
             return Err(ShardError::Foreign {
                 path: p.path.clone(),
                 first: first.path.clone(),
@@ -656,6 +677,26 @@ mod tests {
             ),
             "{foreign:?}"
         );
+        let spp = image_part(
+            Shard::new(3, 4).unwrap(),
+            w,
+            h,
+            &rgb,
+            "render; spp: 4; ao: 2",
+        );
+        let first = image_part(
+            Shard::new(0, 4).unwrap(),
+            w,
+            h,
+            &rgb,
+            "render; spp: 1; ao: 2",
+        );
+        match merge(&[first, spp]) {
+            Err(ShardError::Foreign { theirs, ours, .. }) => {
+                assert_eq!((theirs.as_str(), ours.as_str()), ("spp: 4", "spp: 1"));
+            }
+            other => panic!("{other:?}"),
+        }
         let taller = image_part(Shard::new(3, 4).unwrap(), w, h + 1, &image(w, h + 1), "job");
         assert!(matches!(
             merge(&[ps[0].clone(), ps[1].clone(), ps[2].clone(), taller]),
