@@ -16,6 +16,11 @@
 //!   accelerator and ray kind ([`mod@bench`]), and reads or writes the binary
 //!   ray file of DESIGN.md ([`accel_scenes::rayfile`]).
 //!
+//! - `render --shard I/N` renders one shard of the image for a job array,
+//!   `render bench --hits` writes the nearest hits of a ray file (or of one
+//!   shard's slice), and `render merge` joins the parts ([`shard`] for the
+//!   format and checks, [`part_io`] for what each command writes).
+//!
 //! The studies (`tradeoff`, `sweep-density`, `choose-bench`, `peers`) are
 //! the `studies` crate's binary, built on this library's scenes, ray sets
 //! and output files.
