@@ -90,26 +90,55 @@ pub fn build_config<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
     config: &AccelConfig,
     prims: &'a P,
 ) -> Result<AnyAccelerator<'a, T, P>, AccelError> {
+    build_config_within(config, prims, None)
+}
+
+/// [`build_config`] within a memory budget of `max_bytes` (`None`: the
+/// structures' own defaults), refused with the figure as soon as the build
+/// counts past it: the octree's and the kD-tree's `max_bytes`, and the
+/// grid's cells and references (4 bytes each) at most half of it each. A
+/// budget only lowers the structures' defaults, never raises them.
+///
+/// # Errors
+/// As [`build_config`]; [`BuildError::BudgetExceeded`] past the budget.
+pub fn build_config_within<'a, T: Real, P: PrimitiveSet<T> + ?Sized>(
+    config: &AccelConfig,
+    prims: &'a P,
+    max_bytes: Option<u64>,
+) -> Result<AnyAccelerator<'a, T, P>, AccelError> {
     let kind = config.kind();
     let wrap = |cause| AccelError::Build { kind, cause };
+    let cap =
+        |default: u64, share: u64| max_bytes.map_or(default, |b| default.min((b / share).max(1)));
     Ok(match config {
         AccelConfig::Grid {
             density,
             layout,
             parts,
         } => {
+            let defaults = GridParams::with_density(*density);
             let params = GridParams {
                 layout: *layout,
                 parts: *parts,
-                ..GridParams::with_density(*density)
+                max_cells: cap(defaults.max_cells, 8),
+                max_references: cap(defaults.max_references, 8),
+                ..defaults
             };
             AnyAccelerator::Grid(Grid::with_params(prims, &params).map_err(wrap)?)
         }
         AccelConfig::Octree(p) => {
-            AnyAccelerator::Octree(Octree::with_params(prims, p).map_err(wrap)?)
+            let p = OctreeParams {
+                max_bytes: cap(p.max_bytes, 1),
+                ..p.clone()
+            };
+            AnyAccelerator::Octree(Octree::with_params(prims, &p).map_err(wrap)?)
         }
         AccelConfig::KdTree(p) => {
-            AnyAccelerator::KdTree(KdTree::with_params(prims, p).map_err(wrap)?)
+            let p = KdTreeParams {
+                max_bytes: cap(p.max_bytes, 1),
+                ..p.clone()
+            };
+            AnyAccelerator::KdTree(KdTree::with_params(prims, &p).map_err(wrap)?)
         }
         AccelConfig::Brute => AnyAccelerator::Brute(BruteForce::new(prims).map_err(wrap)?),
     })

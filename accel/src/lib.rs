@@ -69,7 +69,7 @@ pub use any::AnyAccelerator;
 pub use choose::{Choice, ChooseError, choose, choose_with_probe};
 pub use config::{
     AccelConfig, AccelError, AccelKind, GRID_LAYOUT, KDTREE_PRESETS, OCTREE_PRESETS, UnknownAccel,
-    build, build_config, kdtree_preset, octree_preset,
+    build, build_config, build_config_within, kdtree_preset, octree_preset,
 };
 
 pub use accel_core::{

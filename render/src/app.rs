@@ -25,6 +25,9 @@ use anyhow::{Context, Result, bail};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+/// Bytes in a GiB, for `--memory-budget`.
+const GIB: f64 = (1u64 << 30) as f64;
+
 /// Sets the number of rayon worker threads, if asked.
 fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(n) = threads {
@@ -129,7 +132,6 @@ pub const RENDER_BYTES_PER_PIXEL: u64 = 2 * size_of::<Pixel>() as u64;
 /// # Errors
 /// A message with the estimate and the budget.
 fn check_render_memory(args: &RenderArgs) -> Result<()> {
-    const GIB: f64 = (1u64 << 30) as f64;
     let pixels = u64::from(args.width) * u64::from(args.height);
     let needed = pixels.saturating_mul(RENDER_BYTES_PER_PIXEL);
     let budget = args.memory_budget * GIB;
@@ -165,7 +167,6 @@ pub const BENCH_BYTES_PER_PIXEL: [u64; 2] = [300, 480];
 /// # Errors
 /// A message with the estimate and the budget.
 fn check_bench_memory(args: &BenchArgs) -> Result<()> {
-    const GIB: f64 = (1u64 << 30) as f64;
     if args.rays.is_some() {
         return Ok(());
     }
@@ -261,7 +262,12 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> Result<()> {
     let offset = args.dials.spawn_offset::<T>();
     let accel = match args.accel.kind() {
-        Some(kind) => accel::build_config(&args.dials.config(kind), prims)?,
+        Some(kind) => accel::build_config_within(
+            &args.dials.config(kind),
+            prims,
+            Some((args.memory_budget * GIB) as u64),
+        )
+        .with_context(|| format!("within --memory-budget {} GiB", args.memory_budget))?,
         None => {
             let choice = accel::choose_with_probe(prims, expected_render_rays(args), |a| {
                 view_probe(

@@ -213,7 +213,9 @@ pub struct RenderArgs {
     pub threads: Option<usize>,
     /// Memory the render's image buffers may take, in GiB: a render whose
     /// estimate (bytes per pixel × pixels) is larger is refused, with the
-    /// figure, before any work.
+    /// figure, before any work. The structure a named `--accel` builds gets
+    /// the same budget of its own, and its build stops, with the figure, as
+    /// soon as it counts past it.
     #[arg(long, value_name = "GIB", default_value_t = limits::MEMORY_BUDGET_GIB, value_parser = memory_budget_parser, allow_negative_numbers = true)]
     pub memory_budget: f64,
     /// One shard of the image, for a job array.

@@ -556,3 +556,55 @@ fn renders_over_the_memory_budget_are_refused_before_any_work() {
     let o = run(dir.path(), &args);
     assert!(o.status.success(), "{}", common::stderr(&o));
 }
+
+/// `--memory-budget` also bounds the structure a named `--accel` builds:
+/// each structure stops at it with the figure, naming the option, and no
+/// image is written. A 100k-triangle sphere takes about 4 MiB in each.
+#[test]
+fn a_structure_over_the_memory_budget_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for accel in ["grid", "octree", "kdtree"] {
+        let o = run(
+            dir.path(),
+            &[
+                "sphere_100k",
+                "--accel",
+                accel,
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--memory-budget",
+                "0.0005",
+                "--out",
+                "x.png",
+            ],
+        );
+        assert_refused(
+            &o,
+            &["--memory-budget 0.0005 GiB", accel, "over the budget"],
+        );
+        assert!(
+            entries(dir.path()).is_empty(),
+            "{accel}: {:?}",
+            entries(dir.path())
+        );
+        // The same render with the default budget builds and writes.
+        let o = run(
+            dir.path(),
+            &[
+                "sphere_100k",
+                "--accel",
+                accel,
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--out",
+                "x.png",
+            ],
+        );
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        std::fs::remove_file(dir.path().join("x.png")).unwrap();
+    }
+}
