@@ -687,7 +687,7 @@ mod tests {
         // 4.9e-4) and rays from near the origin whose largest component is
         // horizontal: t must be the plane's own answer, (-1.5 - oz) / dz
         // (computed in f64 from the same f32 inputs), to an ulp or two, not
-        // off by the rounding of the corners (bug found by `render peers`:
+        // off by the rounding of the corners (bug found by `studies peers`:
         // 1e-4 relative before the transform ran in f64).
         let (p0, p1, p2) = (
             v::<f32>(-5000.0, -5000.0, -1.5),
