@@ -190,6 +190,7 @@ mod tests {
     use super::*;
     use crate::PreparedRay;
     use crate::triangle::intersect_triangle;
+    use crate::triangle::tests::v;
 
     /// A tiny deterministic generator (the `scenes` feature's is optional).
     struct Rng(u64);
@@ -211,10 +212,6 @@ mod tests {
             let r = (1.0 - z * z).max(0.0).sqrt();
             Vec3::new(r * phi.cos(), r * phi.sin(), z)
         }
-    }
-
-    fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
-        Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z))
     }
 
     #[test]

@@ -646,15 +646,17 @@ impl<T: Real> Primitive<T> for Triangle<T> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::Ray;
 
-    fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
+    /// A point of `T` from `f64` coordinates (the crate's tests share it).
+    pub(crate) fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
         Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z))
     }
 
-    fn ray<T: Real>(o: Vec3<T>, d: Vec3<T>) -> PreparedRay<T> {
+    /// The prepared ray from `o` along `d` (the crate's tests share it).
+    pub(crate) fn ray<T: Real>(o: Vec3<T>, d: Vec3<T>) -> PreparedRay<T> {
         PreparedRay::new(Ray::new(o, d).unwrap())
     }
 
