@@ -10,7 +10,7 @@
 //! and build time against cells per object.
 
 use crate::cli::PassArgs;
-use crate::plot::{Panel, Series, draw_panels};
+use crate::plot::{Panel, Series, write_csv_and_plot};
 use crate::tradeoff::{scene_list, short_name};
 use accel::{AccelConfig, build_config};
 use accel_core::spawn::SpawnOffset;
@@ -143,14 +143,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    let dest = csv_out.dest().display().to_string();
-    csv_out.write_all(csv(&rows).as_bytes())?;
-    println!("wrote {dest}");
-    let (w, h, rgb) = draw_panels(&panels(&rows), 2, 640, 480)?;
-    let dest = plot_out.dest().display().to_string();
-    plot_out.write_png(w, h, &rgb)?;
-    println!("wrote {dest}");
-    Ok(())
+    write_csv_and_plot(csv_out, &csv(&rows), plot_out, &panels(&rows))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

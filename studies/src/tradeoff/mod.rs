@@ -25,7 +25,7 @@
 pub mod settings;
 
 use crate::cli::PassArgs;
-use crate::plot::{Panel, Series, draw_panels};
+use crate::plot::{Panel, Series, write_csv_and_plot};
 use accel::build_config;
 use accel_core::spawn::SpawnOffset;
 use accel_core::{
@@ -236,14 +236,7 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    let dest = csv_out.dest().display().to_string();
-    csv_out.write_all(csv(&rows).as_bytes())?;
-    println!("wrote {dest}");
-    let (w, h, rgb) = draw_panels(&plot_panels(&rows), 2, 640, 480)?;
-    let dest = plot_out.dest().display().to_string();
-    plot_out.write_png(w, h, &rgb)?;
-    println!("wrote {dest}");
-    Ok(())
+    write_csv_and_plot(csv_out, &csv(&rows), plot_out, &plot_panels(&rows))
 }
 
 fn measure(s: &Setting, scene: &Scene, r: &Reference, args: &TradeoffArgs) -> Result<Row> {
@@ -521,6 +514,7 @@ fn plot_panels(rows: &[Row]) -> Vec<Panel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plot::draw_panels;
 
     fn args() -> TradeoffArgs {
         TradeoffArgs {
