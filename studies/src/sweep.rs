@@ -11,7 +11,7 @@
 
 use crate::cli::PassArgs;
 use crate::plot::{Panel, Series, write_csv_and_plot};
-use crate::tradeoff::{scene_list, short_name};
+use crate::tradeoff::{scene_list, short_name, time_set};
 use accel::{AccelConfig, build_config};
 use accel_core::spawn::SpawnOffset;
 use accel_core::{Accelerator, Real};
@@ -176,20 +176,7 @@ fn sweep_one<T: Real>(
     let mut mrays = [0.0; 3];
     let (mut rays, mut secs) = (0usize, 0.0);
     for (i, set) in sets.iter().enumerate() {
-        // One untimed pass first: caches and clocks warm up.
-        std::hint::black_box(
-            bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
-                .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?,
-        );
-        let mut times = Vec::new();
-        for _ in 0..repeats {
-            let t = Instant::now();
-            let hits = bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
-                .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?;
-            std::hint::black_box(hits);
-            times.push(t.elapsed().as_secs_f64());
-        }
-        let s = median(times);
+        let s = time_set(grid.as_dyn(), set, repeats)?;
         mrays[i] = if s > 0.0 {
             set.rays.len() as f64 / s / 1e6
         } else {

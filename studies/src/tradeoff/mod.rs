@@ -371,8 +371,16 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     })
 }
 
-/// Median seconds of `repeats` passes over the set, on the current pool.
-fn time_set<T: Real>(accel: &dyn Accelerator<T>, set: &RaySet<T>, repeats: u32) -> Result<f64> {
+/// Median seconds of `repeats` passes over the set, on the current pool,
+/// after an untimed pass (the sweep times its grids with it too).
+///
+/// # Errors
+/// A ray the structure refuses.
+pub(crate) fn time_set<T: Real>(
+    accel: &dyn Accelerator<T>,
+    set: &RaySet<T>,
+    repeats: u32,
+) -> Result<f64> {
     let any = set.kind.any_hit();
     // One untimed pass first: caches and clocks warm up.
     std::hint::black_box(
