@@ -257,15 +257,8 @@ impl<T: Real, M: Borrow<TriangleMesh<T>> + Sync> PrimitiveSet<T> for MollerTrumb
 mod tests {
     use super::*;
     use crate::triangle::intersect_triangle;
+    use crate::triangle::tests::{ray as prep, v};
     use crate::{Accelerator, BruteForce, Ray};
-
-    fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
-        Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z))
-    }
-
-    fn prep<T: Real>(o: Vec3<T>, d: Vec3<T>) -> PreparedRay<T> {
-        PreparedRay::new(Ray::new(o, d).unwrap())
-    }
 
     fn agrees_with_watertight_inside<T: Real>() {
         let (p0, p1, p2) = (v::<T>(0.0, 0.0, 2.0), v(4.0, 0.0, 2.0), v(0.0, 4.0, 2.0));

@@ -190,32 +190,7 @@ mod tests {
     use super::*;
     use crate::PreparedRay;
     use crate::triangle::intersect_triangle;
-
-    /// A tiny deterministic generator (the `scenes` feature's is optional).
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_f64(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next_f64()
-        }
-        fn unit_vector(&mut self) -> Vec3<f64> {
-            let z = self.range(-1.0, 1.0);
-            let phi = self.range(0.0, core::f64::consts::TAU);
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        }
-    }
-
-    fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
-        Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z))
-    }
+    use crate::triangle::tests::{Rng, v};
 
     #[test]
     fn an_exact_point_on_an_axis_plane_still_leaves_it() {

@@ -646,15 +646,17 @@ impl<T: Real> Primitive<T> for Triangle<T> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::Ray;
 
-    fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
+    /// A point of `T` from `f64` coordinates (the crate's tests share it).
+    pub(crate) fn v<T: Real>(x: f64, y: f64, z: f64) -> Vec3<T> {
         Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z))
     }
 
-    fn ray<T: Real>(o: Vec3<T>, d: Vec3<T>) -> PreparedRay<T> {
+    /// The prepared ray from `o` along `d` (the crate's tests share it).
+    pub(crate) fn ray<T: Real>(o: Vec3<T>, d: Vec3<T>) -> PreparedRay<T> {
         PreparedRay::new(Ray::new(o, d).unwrap())
     }
 
@@ -687,7 +689,7 @@ mod tests {
         // 4.9e-4) and rays from near the origin whose largest component is
         // horizontal: t must be the plane's own answer, (-1.5 - oz) / dz
         // (computed in f64 from the same f32 inputs), to an ulp or two, not
-        // off by the rounding of the corners (bug found by `render peers`:
+        // off by the rounding of the corners (bug found by `studies peers`:
         // 1e-4 relative before the transform ran in f64).
         let (p0, p1, p2) = (
             v::<f32>(-5000.0, -5000.0, -1.5),
@@ -744,7 +746,7 @@ mod tests {
         // of these cases got the wrong answer, either way (and 2 of 262,144
         // camera rays of the soup scene missed a nearer triangle they pass
         // through).
-        let mut rng = Lcg(11);
+        let mut rng = Rng(11);
         let (mut compared, mut hits) = (0, 0);
         for _ in 0..20_000 {
             let p = [0; 3].map(|_| {
@@ -760,7 +762,7 @@ mod tests {
                 rng.range(-1.0, 0.0),
             );
             // A point on edge (p_i, p_j), moved across it by a tiny amount.
-            let i = (rng.next() * 3.0) as usize % 3;
+            let i = (rng.next_f64() * 3.0) as usize % 3;
             let (a, b, c) = (
                 p[i].cast::<f64>(),
                 p[(i + 1) % 3].cast(),
@@ -896,19 +898,26 @@ mod tests {
         assert!(triangle_overlaps_box(t[0], t[1], t[2], &b));
     }
 
-    /// A tiny deterministic generator for the clipper's tests.
-    struct Lcg(u64);
+    /// A tiny deterministic generator (the crate's tests share it; the
+    /// scenes crate's `SplitMix64` is not a dependency of accel-core).
+    pub(crate) struct Rng(pub(crate) u64);
 
-    impl Lcg {
-        fn next(&mut self) -> f64 {
+    impl Rng {
+        pub(crate) fn next_f64(&mut self) -> f64 {
             self.0 = self
                 .0
                 .wrapping_mul(6_364_136_223_846_793_005)
                 .wrapping_add(1_442_695_040_888_963_407);
             (self.0 >> 11) as f64 / (1u64 << 53) as f64
         }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
+        pub(crate) fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.next_f64()
+        }
+        pub(crate) fn unit_vector(&mut self) -> Vec3<f64> {
+            let z = self.range(-1.0, 1.0);
+            let phi = self.range(0.0, core::f64::consts::TAU);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
         }
     }
 
@@ -998,7 +1007,7 @@ mod tests {
 
     #[test]
     fn clip_holds_dense_samples_of_random_triangles_in_a_1_2_3_box() {
-        let mut rng = Lcg(17);
+        let mut rng = Rng(17);
         let b = Aabb::new(v::<f64>(0.5, -1.0, 2.0), v(1.5, 1.0, 5.0));
         for _ in 0..400 {
             let p = [0; 3].map(|_| {
@@ -1016,7 +1025,7 @@ mod tests {
     /// The split clipper against the single one on each half: equal boxes
     /// (or both empty), for triangles from much smaller than the box to much
     /// larger, cuts anywhere in it, on its faces and through vertices.
-    fn check_split<T: Real>(rng: &mut Lcg, cases: usize) -> usize {
+    fn check_split<T: Real>(rng: &mut Rng, cases: usize) -> usize {
         let b = Aabb::new(v::<T>(0.5, -1.0, 2.0), v(1.5, 1.0, 5.0));
         let mut shared = 0;
         for _ in 0..cases {
@@ -1035,10 +1044,10 @@ mod tests {
                 }
                 v::<T>(c[0], c[1], c[2])
             });
-            let axis = (rng.next() * 3.0) as usize % 3;
-            let pick = rng.next();
+            let axis = (rng.next_f64() * 3.0) as usize % 3;
+            let pick = rng.next_f64();
             let s = if pick < 0.2 {
-                p[(rng.next() * 3.0) as usize % 3][axis]
+                p[(rng.next_f64() * 3.0) as usize % 3][axis]
             } else if pick < 0.3 {
                 b.min[axis]
             } else {
@@ -1062,7 +1071,7 @@ mod tests {
 
     #[test]
     fn split_clip_equals_the_single_clip_of_each_half() {
-        let mut rng = Lcg(5);
+        let mut rng = Rng(5);
         // About half the cases take the shared path (the others return early).
         assert!(check_split::<f32>(&mut rng, 20_000) > 5_000);
         assert!(check_split::<f64>(&mut rng, 20_000) > 5_000);
@@ -1115,7 +1124,7 @@ mod tests {
     fn clip_is_conservative_far_from_the_origin_in_f32() {
         // Slivers and near-parallel edges at an offset where f32 spacing is
         // coarse: the samples (in f64, from the f32 vertices) stay inside.
-        let mut rng = Lcg(99);
+        let mut rng = Rng(99);
         let o = 4096.0;
         let b = Aabb::new(
             v::<f64>(o + 0.25, o - 0.5, o),
@@ -1165,7 +1174,7 @@ mod tests {
     /// clearly separated one never does, and the batched, single and
     /// prepared tests agree.
     fn check_box_overlaps<T: Real>(seed: u64, offset: f64, scale: f64) {
-        let mut rng = Lcg(seed);
+        let mut rng = Rng(seed);
         let (mut met, mut separated) = ([0; 2], [0; 2]);
         for _ in 0..150 {
             let pt: [Vec3<T>; 3] = [0; 3].map(|_| {

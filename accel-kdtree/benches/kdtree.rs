@@ -7,11 +7,11 @@
 //! it, e.g. `cargo bench -p accel-kdtree -- 'terrain_1m/build'` or
 //! `-- 'camera/.*/nearest/1-thread'`.
 
-use accel_core::{Accelerator, Ray, TriangleMesh, Vec3};
+use accel_core::{Accelerator, Ray, TriangleMesh};
 use accel_grid::Grid;
 use accel_kdtree::{KdTree, KdTreeParams};
-use accel_scenes::gltf::{load, shared_scene_files};
-use accel_scenes::{Camera, GeneratedScene, random_rays};
+use accel_scenes::gltf::{BenchScene, bench_scenes};
+use accel_scenes::random_rays;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -21,37 +21,8 @@ const CAMERA_SIDE: u32 = 256;
 /// Number of random (incoherent) rays.
 const RANDOM_RAYS: usize = 65_536;
 
-struct BenchScene {
-    name: String,
-    mesh: TriangleMesh<f32>,
-    camera: Camera,
-}
-
 fn scenes() -> Vec<BenchScene> {
-    let mut out: Vec<BenchScene> = GeneratedScene::ALL
-        .iter()
-        .map(|&s| BenchScene {
-            name: s.name().to_owned(),
-            mesh: s.mesh().cast().expect("generated scenes fit f32"),
-            camera: s.camera(),
-        })
-        .collect();
-    for path in shared_scene_files() {
-        let Ok(scene) = load(&path) else { continue };
-        let Ok(mesh) = scene.mesh.cast() else {
-            continue;
-        };
-        let camera = Camera::frame(
-            &scene.mesh.bounds(),
-            Vec3::new(0.3, -1.0, 0.4),
-            accel_scenes::Z_UP,
-        );
-        let name = path
-            .file_stem()
-            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-        out.push(BenchScene { name, mesh, camera });
-    }
-    out
+    bench_scenes(|_| true)
 }
 
 /// The leading part of `rays` that one thread traces in about `budget`:

@@ -14,11 +14,11 @@
 //! Memory and shape are printed once per scene (criterion has no unit for
 //! them), e.g. `teapot_in_stadium: grid 41.9 B/tri, octree 40.3 B/tri (0.96x)`.
 
-use accel_core::{Accelerator, Ray, TriangleMesh, Vec3};
+use accel_core::{Accelerator, Ray};
 use accel_grid::Grid;
 use accel_octree::{Octree, OctreeParams};
-use accel_scenes::gltf::{load, shared_scene_files};
-use accel_scenes::{Camera, GeneratedScene, random_rays};
+use accel_scenes::gltf::{BenchScene, bench_scenes};
+use accel_scenes::random_rays;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -27,12 +27,6 @@ use std::time::{Duration, Instant};
 const CAMERA_SIDE: u32 = 256;
 /// Number of random (incoherent) rays.
 const RANDOM_RAYS: usize = 65_536;
-
-struct BenchScene {
-    name: String,
-    mesh: TriangleMesh<f32>,
-    camera: Camera,
-}
 
 /// Whether `name` passes `ACCEL_BENCH_SCENES` (all do when it is unset).
 fn wanted(name: &str) -> bool {
@@ -44,34 +38,7 @@ fn wanted(name: &str) -> bool {
 }
 
 fn scenes() -> Vec<BenchScene> {
-    let mut out: Vec<BenchScene> = GeneratedScene::ALL
-        .iter()
-        .filter(|s| wanted(s.name()))
-        .map(|&s| BenchScene {
-            name: s.name().to_owned(),
-            mesh: s.mesh().cast().expect("generated scenes fit f32"),
-            camera: s.camera(),
-        })
-        .collect();
-    for path in shared_scene_files() {
-        let name = path
-            .file_stem()
-            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-        if !wanted(&name) {
-            continue;
-        }
-        let Ok(scene) = load(&path) else { continue };
-        let Ok(mesh) = scene.mesh.cast() else {
-            continue;
-        };
-        let camera = Camera::frame(
-            &scene.mesh.bounds(),
-            Vec3::new(0.3, -1.0, 0.4),
-            accel_scenes::Z_UP,
-        );
-        out.push(BenchScene { name, mesh, camera });
-    }
-    out
+    bench_scenes(wanted)
 }
 
 /// The octree variants measured: the default, and the presets on request.

@@ -14,6 +14,18 @@ fn copies(n: usize) -> TriangleMesh<f32> {
     TriangleMesh::new(positions, vec![[0, 1, 2]; n]).unwrap()
 }
 
+/// The build's refusal, `(what, needed, budget)`; panics on any other outcome.
+fn refusal(mesh: &TriangleMesh<f32>, params: &OctreeParams) -> (&'static str, u64, u64) {
+    match Octree::with_params(mesh, params).map(|_| ()).unwrap_err() {
+        BuildError::BudgetExceeded {
+            what,
+            needed,
+            budget,
+        } => (what, needed, budget),
+        e => panic!("expected BudgetExceeded, got {e:?}"),
+    }
+}
+
 /// See: issue 32, item 3 (the octree's part). The uniform grid refuses a
 /// scene over its reference budget from a sample before making its cell
 /// lists; the octree's root grid now does too, rather than enumerating the
@@ -27,21 +39,13 @@ fn many_copies_of_a_large_triangle_are_refused_from_a_sample() {
         max_bytes: 4 << 20,
         ..OctreeParams::default()
     };
-    match Octree::with_params(&mesh, &params).map(|_| ()).unwrap_err() {
-        BuildError::BudgetExceeded {
-            what,
-            needed,
-            budget,
-        } => {
-            assert_eq!(budget, 4 << 20);
-            assert!(
-                what.contains("root") && what.contains("estimated"),
-                "{what}"
-            );
-            assert!(needed > 2 * budget, "{needed}");
-        }
-        e => panic!("expected BudgetExceeded, got {e:?}"),
-    }
+    let (what, needed, budget) = refusal(&mesh, &params);
+    assert_eq!(budget, 4 << 20);
+    assert!(
+        what.contains("root") && what.contains("estimated"),
+        "{what}"
+    );
+    assert!(needed > 2 * budget, "{needed}");
 }
 
 /// A scene the sample leaves to the exact build (up to 1,024 primitives) is
@@ -53,20 +57,12 @@ fn a_small_scene_over_the_budget_is_refused_by_the_exact_build() {
         max_bytes: 64 << 10,
         ..OctreeParams::default()
     };
-    match Octree::with_params(&mesh, &params).map(|_| ()).unwrap_err() {
-        BuildError::BudgetExceeded {
-            what,
-            needed,
-            budget,
-        } => {
-            assert!(!what.contains("estimated"), "{what}");
-            // In the budget's own unit, bytes, like every octree refusal.
-            assert!(what.starts_with("octree bytes"), "{what}");
-            assert_eq!(budget, 64 << 10);
-            assert!(needed > budget, "{needed}");
-        }
-        e => panic!("expected BudgetExceeded, got {e:?}"),
-    }
+    let (what, needed, budget) = refusal(&mesh, &params);
+    assert!(!what.contains("estimated"), "{what}");
+    // In the budget's own unit, bytes, like every octree refusal.
+    assert!(what.starts_with("octree bytes"), "{what}");
+    assert_eq!(budget, 64 << 10);
+    assert!(needed > budget, "{needed}");
 }
 
 /// Under the budget the sample refuses nothing: the same scene builds with

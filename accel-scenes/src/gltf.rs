@@ -11,6 +11,7 @@
 //! view and buffer) before they are read, and a node hierarchy with a cycle
 //! is refused. Skins and morph targets are ignored (the rest pose is used).
 
+use crate::{Camera, GeneratedScene, Z_UP};
 use accel_core::glam;
 use accel_core::{MeshError, TriangleMesh, Vec3};
 use std::path::{Path, PathBuf};
@@ -693,6 +694,54 @@ pub fn shared_scene_files() -> Vec<PathBuf> {
         .collect();
     files.sort();
     files
+}
+
+/// A scene of the criterion benches: its name, its mesh in `f32`, and the
+/// camera its coherent rays come from.
+#[derive(Clone, Debug)]
+pub struct BenchScene {
+    /// The generated scene's name, or the file's stem.
+    pub name: String,
+    /// The triangles, in `f32`.
+    pub mesh: TriangleMesh<f32>,
+    /// The generated scene's own camera, or [`Camera::frame`] of the file's
+    /// bounds from `(0.3, -1, 0.4)`, `Z_UP`.
+    pub camera: Camera,
+}
+
+/// The scenes every structure crate's criterion bench runs on: each
+/// [`GeneratedScene`], then each of [`shared_scene_files`], whose name
+/// `wanted` accepts (a file is read only then). A file that does not load,
+/// or does not fit `f32`, is passed over.
+///
+/// # Panics
+/// If a generated scene did not fit `f32`; every one does.
+#[must_use]
+pub fn bench_scenes(wanted: impl Fn(&str) -> bool) -> Vec<BenchScene> {
+    let mut out: Vec<BenchScene> = GeneratedScene::ALL
+        .iter()
+        .filter(|s| wanted(s.name()))
+        .map(|&s| BenchScene {
+            name: s.name().to_owned(),
+            mesh: s.mesh().cast().expect("generated scenes fit f32"),
+            camera: s.camera(),
+        })
+        .collect();
+    for path in shared_scene_files() {
+        let name = path
+            .file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        if !wanted(&name) {
+            continue;
+        }
+        let Ok(scene) = load(&path) else { continue };
+        let Ok(mesh) = scene.mesh.cast() else {
+            continue;
+        };
+        let camera = Camera::frame(&scene.mesh.bounds(), Vec3::new(0.3, -1.0, 0.4), Z_UP);
+        out.push(BenchScene { name, mesh, camera });
+    }
+    out
 }
 
 /// The shared scene files for a test that needs them: `None` (the test

@@ -11,8 +11,8 @@
 //! - [`camera`]: a pinhole [`Camera`] and the one framing rule,
 //!   [`Camera::frame`];
 //! - [`gltf`] (feature `gltf`, on by default): glTF 2.0 files as one
-//!   triangle mesh with the file's cameras, and the shared test scenes
-//!   (`ACCEL_SCENES`);
+//!   triangle mesh with the file's cameras, the shared test scenes
+//!   (`ACCEL_SCENES`), and the benches' scene list (`gltf::bench_scenes`);
 //! - [`rayfile`]: the binary ray file of the design (`RAYS`, version 1,
 //!   eight `f32` per ray), for cross-checking against other tools;
 //! - [`aimed`]: rays aimed at shared edges and vertices of closed meshes,

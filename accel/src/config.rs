@@ -407,17 +407,23 @@ fn kdtree_preset_name(p: &KdTreeParams) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use accel_core::{Accelerator, Ray, Vec3};
+    use accel_core::{Accelerator, Hit, Ray, TriangleMesh, Vec3};
     use accel_scenes::uv_sphere;
 
-    #[test]
-    fn every_available_kind_builds_and_answers_like_brute_force() {
+    /// A sphere, a ray that hits it, and brute force's answer.
+    fn sphere_ray_and_reference() -> (TriangleMesh<f64>, Ray<f64>, Option<Hit<f64>>) {
         let mesh = uv_sphere(Vec3::ZERO, 1.0, 500);
         let ray = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
         let reference = build(AccelKind::Brute, &mesh)
             .unwrap()
             .intersect(&ray)
             .unwrap();
+        (mesh, ray, reference)
+    }
+
+    #[test]
+    fn every_available_kind_builds_and_answers_like_brute_force() {
+        let (mesh, ray, reference) = sphere_ray_and_reference();
         assert!(reference.is_some());
         for kind in AccelKind::ALL {
             let accel = build(kind, &mesh).unwrap();
@@ -441,12 +447,7 @@ mod tests {
 
     #[test]
     fn configs_build_label_and_refuse_bad_parameters() {
-        let mesh = uv_sphere(Vec3::ZERO, 1.0, 500);
-        let ray = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::new(0.0, 0.0, 1.0)).unwrap();
-        let reference = build(AccelKind::Brute, &mesh)
-            .unwrap()
-            .intersect(&ray)
-            .unwrap();
+        let (mesh, ray, reference) = sphere_ray_and_reference();
         let mut labels = Vec::new();
         let configs = [AccelConfig::grid(3.0)]
             .into_iter()

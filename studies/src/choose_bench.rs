@@ -164,16 +164,18 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                 // Every structure answers alike: the sample is made with the
                 // octree, which no scene makes slow (the grid can be).
                 let octree = accel::build(accel::AccelKind::Octree, &mesh)?;
+                // The budget's view, with `primaries` primary rays.
+                let shape = |primaries| ProbeShape {
+                    width: budget.width,
+                    height: budget.height,
+                    ao: budget.ao,
+                    primaries,
+                };
                 let sample: Vec<ProbeRay<f32>> = view_probe(
                     &octree,
                     &mesh,
                     &scene.view,
-                    ProbeShape {
-                        width: budget.width,
-                        height: budget.height,
-                        ao: budget.ao,
-                        primaries: args.sample_primaries,
-                    },
+                    shape(args.sample_primaries),
                     SpawnOffset::ErrorBound,
                 )?;
                 drop(octree);
@@ -215,12 +217,7 @@ pub fn run(args: &ChooseBenchArgs) -> Result<()> {
                         a,
                         &mesh,
                         &scene.view,
-                        ProbeShape {
-                            width: budget.width,
-                            height: budget.height,
-                            ao: budget.ao,
-                            primaries: choose::PROBE_PRIMARIES,
-                        },
+                        shape(choose::PROBE_PRIMARIES),
                         SpawnOffset::ErrorBound,
                     )
                 })?;

@@ -2,7 +2,8 @@
 //! options are its own module's (`TradeoffArgs` in [`crate::tradeoff`], and
 //! so on); this only names them.
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use render::cli::{side_parser, threads_parser};
 
 /// The workspace's studies: speed against accuracy, the grid density
 /// sweep, the chooser's check, and the peers.
@@ -40,4 +41,22 @@ pub enum Command {
     /// `--features peers`; Embree 3 with `--features embree`) on the same
     /// scene and rays on one thread: Mrays/s, ratios, build times, agreement.
     Peers(crate::peers::run::PeersArgs),
+}
+
+/// The options `tradeoff` and `sweep-density` share: the primary-ray view
+/// and how many threads and timed passes each figure takes.
+#[derive(Clone, Debug, Args)]
+pub struct PassArgs {
+    /// Width of the primary-ray view.
+    #[arg(long, default_value_t = 256, value_parser = side_parser(), allow_negative_numbers = true)]
+    pub width: u32,
+    /// Height of the primary-ray view.
+    #[arg(long, default_value_t = 192, value_parser = side_parser(), allow_negative_numbers = true)]
+    pub height: u32,
+    /// Threads for builds and timed passes.
+    #[arg(long, default_value_t = 1, value_parser = threads_parser(), allow_negative_numbers = true)]
+    pub threads: usize,
+    /// Timed passes (and at most this many builds) per figure; the median is kept.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
+    pub repeats: u32,
 }

@@ -13,6 +13,7 @@ use plotters_backend::{
     BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind, FontTransform,
 };
 use render::font::{ADVANCE, GLYPH_H, GLYPH_W, glyph};
+use render::output::PendingFile;
 
 type BitmapError = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
 
@@ -382,6 +383,28 @@ fn draw_panel(panel: &Panel, area: &DrawingArea<FontBackend<'_>, Shift>) -> Resu
                 .map_err(plot_err)?
         ),
     }
+    Ok(())
+}
+
+/// Writes `csv` to `csv_out`, then `panels` (two columns of 640 × 480
+/// pixels) as a PNG to `plot_out`, and says `wrote …` for each: the end of
+/// `studies tradeoff` and `studies sweep-density`.
+///
+/// # Errors
+/// A file that cannot be written, or [`PlotError`].
+pub fn write_csv_and_plot(
+    csv_out: PendingFile,
+    csv: &str,
+    plot_out: PendingFile,
+    panels: &[Panel],
+) -> anyhow::Result<()> {
+    let dest = csv_out.dest().display().to_string();
+    csv_out.write_all(csv.as_bytes())?;
+    println!("wrote {dest}");
+    let (w, h, rgb) = draw_panels(panels, 2, 640, 480)?;
+    let dest = plot_out.dest().display().to_string();
+    plot_out.write_png(w, h, &rgb)?;
+    println!("wrote {dest}");
     Ok(())
 }
 

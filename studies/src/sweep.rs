@@ -9,8 +9,9 @@
 //! Mrays/s; the plot shows throughput (relative to the scene's best density)
 //! and build time against cells per object.
 
-use crate::plot::{Panel, Series, draw_panels};
-use crate::tradeoff::{scene_list, short_name};
+use crate::cli::PassArgs;
+use crate::plot::{Panel, Series, write_csv_and_plot};
+use crate::tradeoff::{scene_list, short_name, time_set};
 use accel::{AccelConfig, build_config};
 use accel_core::spawn::SpawnOffset;
 use accel_core::{Accelerator, Real};
@@ -19,7 +20,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use render::app::{check_png_name, load_scene, mesh_in};
 use render::bench::{self, RaySet};
-use render::cli::{density_parser, side_parser, threads_parser};
+use render::cli::density_parser;
 use render::output::PendingFile;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -44,18 +45,9 @@ pub struct SweepArgs {
     /// Write the plot (PNG) to this file.
     #[arg(long, value_name = "FILE", default_value = "sweep-density.png")]
     pub plot: PathBuf,
-    /// Width of the primary-ray view.
-    #[arg(long, default_value_t = 256, value_parser = side_parser(), allow_negative_numbers = true)]
-    pub width: u32,
-    /// Height of the primary-ray view.
-    #[arg(long, default_value_t = 192, value_parser = side_parser(), allow_negative_numbers = true)]
-    pub height: u32,
-    /// Threads for builds and timed passes.
-    #[arg(long, default_value_t = 1, value_parser = threads_parser(), allow_negative_numbers = true)]
-    pub threads: usize,
-    /// Timed passes (and at most this many builds) per figure; the median is kept.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
-    pub repeats: u32,
+    /// The view and the effort.
+    #[command(flatten)]
+    pub pass: PassArgs,
 }
 
 /// One grid on one scene.
@@ -90,9 +82,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let csv_out = PendingFile::create(&args.csv)?;
     let plot_out = PendingFile::create(&args.plot)?;
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
+        .num_threads(args.pass.threads)
         .build()
-        .with_context(|| format!("cannot start {} threads", args.threads))?;
+        .with_context(|| format!("cannot start {} threads", args.pass.threads))?;
     println!(
         "{:<18} {:>6} {:>9} {:>8} {:>9} {:>8} {:>7} {:>7} {:>7} {:>7}",
         "scene",
@@ -120,8 +112,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
                 generator.as_dyn(),
                 &mesh,
                 &scene.view,
-                args.width,
-                args.height,
+                args.pass.width,
+                args.pass.height,
                 SpawnOffset::ErrorBound,
             )
             .context("generating rays")?
@@ -129,7 +121,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         })?;
         for &m in &args.densities {
             let row = pool
-                .install(|| sweep_one(&mesh, &sets, m, args.repeats))
+                .install(|| sweep_one(&mesh, &sets, m, args.pass.repeats))
                 .with_context(|| format!("{name}: m = {m}"))?;
             let row = SweepRow {
                 scene: short_name(&scene.name),
@@ -151,14 +143,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    let dest = csv_out.dest().display().to_string();
-    csv_out.write_all(csv(&rows).as_bytes())?;
-    println!("wrote {dest}");
-    let (w, h, rgb) = draw_panels(&panels(&rows), 2, 640, 480)?;
-    let dest = plot_out.dest().display().to_string();
-    plot_out.write_png(w, h, &rgb)?;
-    println!("wrote {dest}");
-    Ok(())
+    write_csv_and_plot(csv_out, &csv(&rows), plot_out, &panels(&rows))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -191,20 +176,7 @@ fn sweep_one<T: Real>(
     let mut mrays = [0.0; 3];
     let (mut rays, mut secs) = (0usize, 0.0);
     for (i, set) in sets.iter().enumerate() {
-        // One untimed pass first: caches and clocks warm up.
-        std::hint::black_box(
-            bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
-                .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?,
-        );
-        let mut times = Vec::new();
-        for _ in 0..repeats {
-            let t = Instant::now();
-            let hits = bench::count_hits(grid.as_dyn(), set.kind.any_hit(), &set.rays, true)
-                .map_err(|e| anyhow::anyhow!("{} ray: {e}", set.kind.name()))?;
-            std::hint::black_box(hits);
-            times.push(t.elapsed().as_secs_f64());
-        }
-        let s = median(times);
+        let s = time_set(grid.as_dyn(), set, repeats)?;
         mrays[i] = if s > 0.0 {
             set.rays.len() as f64 / s / 1e6
         } else {

@@ -2,21 +2,10 @@
 //! kind of scene (ordinary placements) and every kind of ray, window and
 //! region box, in f32 and f64.
 
-use accel_core::Real;
 use accel_tests::config::config;
-use accel_tests::scene::SceneSpec;
 use accel_tests::strategies::{boxes, ordinary_placement, rays_and_windows, scene};
 use accel_tests::suite::check_case;
-use accel_tests::{BoxSpec, RaySpec, WindowSpec};
 use proptest::prelude::*;
-
-fn run<T: Real>(
-    scene: &SceneSpec,
-    rays: &[(RaySpec, WindowSpec)],
-    regions: &[BoxSpec],
-) -> Result<(), TestCaseError> {
-    check_case::<T>(scene, rays, regions).map_err(TestCaseError::fail)
-}
 
 proptest! {
     #![proptest_config(config("equivalence_f32", 3000))]
@@ -26,7 +15,7 @@ proptest! {
         rays in rays_and_windows(24),
         regions in prop::collection::vec(boxes(), 0..6),
     ) {
-        run::<f32>(&scene, &rays, &regions)?;
+        check_case::<f32>(&scene, &rays, &regions).map_err(TestCaseError::fail)?;
     }
 }
 
@@ -38,6 +27,6 @@ proptest! {
         rays in rays_and_windows(24),
         regions in prop::collection::vec(boxes(), 0..6),
     ) {
-        run::<f64>(&scene, &rays, &regions)?;
+        check_case::<f64>(&scene, &rays, &regions).map_err(TestCaseError::fail)?;
     }
 }

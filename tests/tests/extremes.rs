@@ -6,22 +6,12 @@
 //! ([`Limit`]): equal to brute force, or refused by every accelerator with
 //! the same `OutOfRange`.
 
-use accel_core::Real;
 use accel_tests::config::config;
 use accel_tests::limits::{Limit, check_case_at_limit};
-use accel_tests::scene::{Placement, SceneSpec};
+use accel_tests::scene::Placement;
 use accel_tests::strategies::{boxes, extreme_placement, far_offsets, rays_and_windows, scene};
 use accel_tests::suite::check_case;
-use accel_tests::{BoxSpec, RaySpec, WindowSpec};
 use proptest::prelude::*;
-
-fn run<T: Real>(
-    scene: &SceneSpec,
-    rays: &[(RaySpec, WindowSpec)],
-    regions: &[BoxSpec],
-) -> Result<(), TestCaseError> {
-    check_case::<T>(scene, rays, regions).map_err(TestCaseError::fail)
-}
 
 proptest! {
     #![proptest_config(config("extremes_f32", 3000))]
@@ -31,7 +21,7 @@ proptest! {
         rays in rays_and_windows(24),
         regions in prop::collection::vec(boxes(), 0..6),
     ) {
-        run::<f32>(&scene, &rays, &regions)?;
+        check_case::<f32>(&scene, &rays, &regions).map_err(TestCaseError::fail)?;
     }
 }
 
@@ -43,7 +33,7 @@ proptest! {
         rays in rays_and_windows(24),
         regions in prop::collection::vec(boxes(), 0..6),
     ) {
-        run::<f64>(&scene, &rays, &regions)?;
+        check_case::<f64>(&scene, &rays, &regions).map_err(TestCaseError::fail)?;
     }
 }
 

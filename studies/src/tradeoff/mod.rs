@@ -24,7 +24,8 @@
 
 pub mod settings;
 
-use crate::plot::{Panel, Series, draw_panels};
+use crate::cli::PassArgs;
+use crate::plot::{Panel, Series, write_csv_and_plot};
 use accel::build_config;
 use accel_core::spawn::SpawnOffset;
 use accel_core::{
@@ -37,7 +38,7 @@ use clap::Args;
 use rayon::prelude::*;
 use render::app::{load_scene, mesh_in};
 use render::bench::{self, RaySet};
-use render::cli::{Precision, side_parser, threads_parser};
+use render::cli::Precision;
 use render::output::PendingFile;
 use render::scene::Scene;
 use settings::{Setting, Spawn, all_settings};
@@ -58,18 +59,9 @@ pub struct TradeoffArgs {
     /// Write the plot of throughput against error (PNG) to this file.
     #[arg(long, value_name = "FILE", default_value = "tradeoff.png")]
     pub plot: PathBuf,
-    /// Width of the primary-ray view.
-    #[arg(long, default_value_t = 256, value_parser = side_parser(), allow_negative_numbers = true)]
-    pub width: u32,
-    /// Height of the primary-ray view.
-    #[arg(long, default_value_t = 192, value_parser = side_parser(), allow_negative_numbers = true)]
-    pub height: u32,
-    /// Threads for builds and timed passes.
-    #[arg(long, default_value_t = 1, value_parser = threads_parser(), allow_negative_numbers = true)]
-    pub threads: usize,
-    /// Timed passes (and at most this many builds) per figure; the median is kept.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
-    pub repeats: u32,
+    /// The view and the effort.
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Rays compared with the f64 reference per scene.
     #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(2..=1_000_000), allow_negative_numbers = true)]
     pub samples: u32,
@@ -168,7 +160,7 @@ const BRUTE_REFERENCE_BUDGET: f64 = 1e8;
 fn reference(scene: &Scene, args: &TradeoffArgs) -> Result<Reference> {
     let mesh = &scene.mesh;
     let n = args.samples as usize;
-    let mut primary: Vec<Ray<f64>> = scene.view.camera.rays(args.width, args.height);
+    let mut primary: Vec<Ray<f64>> = scene.view.camera.rays(args.pass.width, args.pass.height);
     thin(&mut primary, n / 2);
     let random = random_rays::<f64>(&mesh.bounds(), n - primary.len(), 0x7AD3);
     let rays: Vec<Ray<f64>> = primary.into_iter().chain(random).collect();
@@ -213,9 +205,9 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
     let csv_out = PendingFile::create(&args.csv)?;
     let plot_out = PendingFile::create(&args.plot)?;
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
+        .num_threads(args.pass.threads)
         .build()
-        .with_context(|| format!("cannot start {} threads", args.threads))?;
+        .with_context(|| format!("cannot start {} threads", args.pass.threads))?;
     let settings: Vec<Setting> = all_settings()
         .into_iter()
         .filter(|s| args.only.is_empty() || args.only.iter().any(|o| s.name.contains(o.as_str())))
@@ -232,8 +224,8 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
             reference.rays.len(),
             reference.how,
             reference.leak_rays.len(),
-            args.threads,
-            args.repeats
+            args.pass.threads,
+            args.pass.repeats
         );
         println!("{}", table_header());
         for s in &settings {
@@ -244,14 +236,7 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    let dest = csv_out.dest().display().to_string();
-    csv_out.write_all(csv(&rows).as_bytes())?;
-    println!("wrote {dest}");
-    let (w, h, rgb) = draw_panels(&plot_panels(&rows), 2, 640, 480)?;
-    let dest = plot_out.dest().display().to_string();
-    plot_out.write_png(w, h, &rgb)?;
-    println!("wrote {dest}");
-    Ok(())
+    write_csv_and_plot(csv_out, &csv(&rows), plot_out, &plot_panels(&rows))
 }
 
 fn measure(s: &Setting, scene: &Scene, r: &Reference, args: &TradeoffArgs) -> Result<Row> {
@@ -295,7 +280,7 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     let mut builds = Vec::new();
     let mut accel = None;
     let start = Instant::now();
-    for _ in 0..args.repeats {
+    for _ in 0..args.pass.repeats {
         let t = Instant::now();
         accel = Some(build_config(&s.config, prims)?);
         builds.push(t.elapsed().as_secs_f64() * 1e3);
@@ -309,13 +294,19 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         Spawn::ErrorBound => SpawnOffset::ErrorBound,
         Spawn::Fixed(e) => SpawnOffset::Fixed(T::from_f64(e)),
     };
-    let generated =
-        bench::generate_rays_from(accel, mesh, &scene.view, args.width, args.height, offset)
-            .context("generating rays")?;
+    let generated = bench::generate_rays_from(
+        accel,
+        mesh,
+        &scene.view,
+        args.pass.width,
+        args.pass.height,
+        offset,
+    )
+    .context("generating rays")?;
     let mut mrays = [0.0; 3];
     let (mut rays_total, mut secs_total) = (0usize, 0.0);
     for (i, set) in generated.sets.iter().enumerate() {
-        let secs = time_set(accel, set, args.repeats)?;
+        let secs = time_set(accel, set, args.pass.repeats)?;
         mrays[i] = if secs > 0.0 {
             set.rays.len() as f64 / secs / 1e6
         } else {
@@ -380,8 +371,16 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     })
 }
 
-/// Median seconds of `repeats` passes over the set, on the current pool.
-fn time_set<T: Real>(accel: &dyn Accelerator<T>, set: &RaySet<T>, repeats: u32) -> Result<f64> {
+/// Median seconds of `repeats` passes over the set, on the current pool,
+/// after an untimed pass (the sweep times its grids with it too).
+///
+/// # Errors
+/// A ray the structure refuses.
+pub(crate) fn time_set<T: Real>(
+    accel: &dyn Accelerator<T>,
+    set: &RaySet<T>,
+    repeats: u32,
+) -> Result<f64> {
     let any = set.kind.any_hit();
     // One untimed pass first: caches and clocks warm up.
     std::hint::black_box(
@@ -523,16 +522,19 @@ fn plot_panels(rows: &[Row]) -> Vec<Panel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plot::draw_panels;
 
     fn args() -> TradeoffArgs {
         TradeoffArgs {
             scene: "default".into(),
             csv: "t.csv".into(),
             plot: "t.png".into(),
-            width: 24,
-            height: 16,
-            threads: 1,
-            repeats: 1,
+            pass: PassArgs {
+                width: 24,
+                height: 16,
+                threads: 1,
+                repeats: 1,
+            },
             samples: 64,
             leak_rays: 400,
             only: Vec::new(),
