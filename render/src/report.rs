@@ -40,6 +40,35 @@ pub fn clap_line(e: &clap::Error) -> String {
     message
 }
 
+/// A binary's `main`: parses the command line with `parse` (help and
+/// version print and exit; any other error is one line on stderr, exit 2),
+/// runs it with `run`, and reports an error in one line (exit 1). `binary`
+/// names the program in the messages.
+pub fn main_of<C: clap::Parser>(
+    binary: &str,
+    run: impl FnOnce(&C) -> anyhow::Result<()>,
+) -> std::process::ExitCode {
+    use clap::error::ErrorKind;
+    let cli = match C::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) => {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("{binary}: error: {} (see {binary} --help)", clap_line(&e));
+            return std::process::ExitCode::from(2);
+        }
+    };
+    match run(&cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the error and its causes, outermost first, each once.
+            eprintln!("{binary}: error: {}", one_line(&e));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::one_line;
