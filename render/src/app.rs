@@ -39,6 +39,20 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
     Ok(())
 }
 
+/// A rayon pool of `threads` workers (all cores when `None`), and that
+/// count: what `render bench` and the studies run their passes in.
+///
+/// # Errors
+/// When the pool cannot start.
+pub fn thread_pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
+    let n = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .with_context(|| format!("cannot start {n} threads"))?;
+    Ok((pool, n))
+}
+
 /// Refuses output names the PNG encoder would not match.
 pub fn check_png_name(path: &Path, option: &str) -> Result<()> {
     let ext = path
@@ -422,32 +436,17 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     // digest, so the parts of one file merge and no other's do.
     let mut slice = None;
     if let Some(rays) = &mut file_rays {
-        let mut digest = crate::shard::Fnv::default();
-        for r in rays.iter() {
-            for c in [r.origin, r.direction] {
-                for v in [c.x, c.y, c.z] {
-                    digest = digest.update(&v.to_bits().to_le_bytes());
-                }
-            }
-            digest = digest.update(&r.t_min.to_bits().to_le_bytes());
-            digest = digest.update(&r.t_max.to_bits().to_le_bytes());
-        }
+        let digest = crate::shard::fnv1a(&accel_scenes::rayfile::encode(rays));
         let total = rays.len();
         let range = shard.map_or(0..total, |s| s.ray_range(total));
         *rays = rays[range.clone()].to_vec();
         slice = Some(HitsSlice {
             first: range.start,
             total: total as u64,
-            rays_digest: digest.finish(),
+            rays_digest: digest,
         });
     }
-    let threads = args
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .with_context(|| format!("cannot start {threads} threads"))?;
+    let (pool, threads) = thread_pool(args.threads)?;
     let scene = load_scene(&args.scene)?;
     let io = BenchIo {
         json_out,

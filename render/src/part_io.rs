@@ -156,13 +156,7 @@ pub fn hits_bytes<T: Real>(
         .collect::<Result<_>>()?;
     let payload = records.concat();
     Ok(match shard {
-        None => {
-            let mut out = Vec::with_capacity(16 + payload.len());
-            out.extend_from_slice(&crate::shard::HITS_MAGIC);
-            out.extend_from_slice(&(rays.len() as u64).to_le_bytes());
-            out.extend_from_slice(&payload);
-            out
-        }
+        None => crate::shard::hits_file(rays.len() as u64, [payload.as_slice()]),
         Some((s, total)) => encode_part(
             PartHeader {
                 kind: PartKind::Hits,

@@ -371,6 +371,19 @@ pub fn hit_record(hit: Option<(u32, f64)>) -> [u8; HIT_BYTES] {
     r
 }
 
+/// A hits file of `rays` rays: [`HITS_MAGIC`], the count, then the
+/// records of `payloads` in order.
+#[must_use]
+pub fn hits_file<'a>(rays: u64, payloads: impl IntoIterator<Item = &'a [u8]>) -> Vec<u8> {
+    let mut out = Vec::with_capacity(16 + rays as usize * HIT_BYTES);
+    out.extend_from_slice(&HITS_MAGIC);
+    out.extend_from_slice(&rays.to_le_bytes());
+    for p in payloads {
+        out.extend_from_slice(p);
+    }
+    out
+}
+
 /// A part file, read and checked on its own.
 #[derive(Clone, Debug)]
 pub struct Part {
@@ -541,15 +554,10 @@ pub fn merge(parts: &[Part]) -> Result<Merged, ShardError> {
                 rgb,
             }
         }
-        PartKind::Hits => {
-            let mut out = Vec::with_capacity(16 + f.rays as usize * HIT_BYTES);
-            out.extend_from_slice(&HITS_MAGIC);
-            out.extend_from_slice(&f.rays.to_le_bytes());
-            for p in parts {
-                out.extend_from_slice(&p.payload);
-            }
-            Merged::Hits(out)
-        }
+        PartKind::Hits => Merged::Hits(hits_file(
+            f.rays,
+            parts.iter().map(|p| p.payload.as_slice()),
+        )),
     })
 }
 

@@ -564,9 +564,8 @@ fn renders_over_the_memory_budget_are_refused_before_any_work() {
 fn a_structure_over_the_memory_budget_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     for accel in ["grid", "octree", "kdtree"] {
-        let o = run(
-            dir.path(),
-            &[
+        let render = |extra: &[&str]| {
+            let mut args = vec![
                 "sphere_100k",
                 "--accel",
                 accel,
@@ -574,12 +573,13 @@ fn a_structure_over_the_memory_budget_is_refused() {
                 "16",
                 "--height",
                 "16",
-                "--memory-budget",
-                "0.0005",
                 "--out",
                 "x.png",
-            ],
-        );
+            ];
+            args.extend(extra);
+            run(dir.path(), &args)
+        };
+        let o = render(&["--memory-budget", "0.0005"]);
         assert_refused(
             &o,
             &["--memory-budget 0.0005 GiB", accel, "over the budget"],
@@ -590,20 +590,7 @@ fn a_structure_over_the_memory_budget_is_refused() {
             entries(dir.path())
         );
         // The same render with the default budget builds and writes.
-        let o = run(
-            dir.path(),
-            &[
-                "sphere_100k",
-                "--accel",
-                accel,
-                "--width",
-                "16",
-                "--height",
-                "16",
-                "--out",
-                "x.png",
-            ],
-        );
+        let o = render(&[]);
         assert!(o.status.success(), "{}", common::stderr(&o));
         std::fs::remove_file(dir.path().join("x.png")).unwrap();
     }

@@ -20,7 +20,7 @@ use crate::tradeoff::{scene_list, short_name};
 use accel::choose::{self, ProbeRay, brute_per_ray, probe_per_ray};
 use accel::{AccelConfig, build_config, kdtree_preset, octree_preset};
 use accel_core::spawn::SpawnOffset;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use render::app::{load_scene, mesh_in};
 use render::cli::threads_parser;
@@ -140,13 +140,7 @@ pub fn candidates() -> Vec<AccelConfig> {
 /// Every refusal, as one line naming the problem.
 pub fn run(args: &ChooseBenchArgs) -> Result<()> {
     let csv_out = PendingFile::create(&args.csv)?;
-    let threads = args
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .with_context(|| format!("cannot start {threads} threads"))?;
+    let (pool, _) = render::app::thread_pool(args.threads)?;
     let mut csv = String::from(
         "scene,triangles,budget,rays,config,build_ms,ns_per_ray,timed_rays,total_s,chosen,best\n",
     );

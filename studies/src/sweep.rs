@@ -81,10 +81,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     check_png_name(&args.plot, "--plot")?;
     let csv_out = PendingFile::create(&args.csv)?;
     let plot_out = PendingFile::create(&args.plot)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.pass.threads)
-        .build()
-        .with_context(|| format!("cannot start {} threads", args.pass.threads))?;
+    let (pool, _) = render::app::thread_pool(Some(args.pass.threads))?;
     println!(
         "{:<18} {:>6} {:>9} {:>8} {:>9} {:>8} {:>7} {:>7} {:>7} {:>7}",
         "scene",

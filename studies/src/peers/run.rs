@@ -295,10 +295,7 @@ pub fn run(args: &PeersArgs) -> Result<()> {
         .as_deref()
         .map(accel_scenes::rayfile::read)
         .transpose()?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .context("cannot start the one-thread pool")?;
+    let (pool, _) = render::app::thread_pool(Some(1))?;
     let report = pool.install(|| measure(args, file_rays))?;
     if let Some(out) = json_out {
         let json = serde_json::to_vec_pretty(&report).context("encoding the JSON report")?;

@@ -204,10 +204,7 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
     render::app::check_png_name(&args.plot, "--plot")?;
     let csv_out = PendingFile::create(&args.csv)?;
     let plot_out = PendingFile::create(&args.plot)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.pass.threads)
-        .build()
-        .with_context(|| format!("cannot start {} threads", args.pass.threads))?;
+    let (pool, _) = render::app::thread_pool(Some(args.pass.threads))?;
     let settings: Vec<Setting> = all_settings()
         .into_iter()
         .filter(|s| args.only.is_empty() || args.only.iter().any(|o| s.name.contains(o.as_str())))
