@@ -125,8 +125,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         let mut cells = CellBox::single([0; 3]);
         for a in 0..3 {
             let rel = self.dir[a] * t;
-            let low = geom.axis_cell_relative(a, self.origin[a], rel - self.delta);
-            let high = geom.axis_cell_relative(a, self.origin[a], rel + self.delta);
+            let (low, high) = self.beam_cells(geom, a, rel);
             cells.lo[a] = low;
             cells.hi[a] = high;
             if self.step[a] > 0 {
@@ -148,6 +147,30 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         }
         self.thin = self.trail == self.lead;
         cells
+    }
+
+    /// The cells along `axis` holding `origin + rel ∓ delta`, as
+    /// [`GridGeometry::axis_cell_relative`] gives them, located once: the
+    /// cell of `rel` is both unless the beam reaches past one of its
+    /// boundaries (the cells are those of monotone comparisons against the
+    /// same stored boundaries, so this is the same answer).
+    #[inline]
+    fn beam_cells(&self, geom: &GridGeometry<T>, axis: usize, rel: T) -> (u32, u32) {
+        let (b, o) = (self.bounds[axis], self.origin[axis]);
+        let mid = geom.axis_cell_relative(axis, o, rel);
+        let (m, last) = (mid as usize, b.len() - 2);
+        let (below, above) = (rel - self.delta, rel + self.delta);
+        let low = if m == 0 || below >= b[m] - o {
+            mid
+        } else {
+            geom.axis_cell_relative(axis, o, below)
+        };
+        let high = if m == last || above < b[m + 1] - o {
+            mid
+        } else {
+            geom.axis_cell_relative(axis, o, above)
+        };
+        (low, high)
     }
 
     /// The walk of the same ray over `blocks`, the grid of blocks of
@@ -577,6 +600,38 @@ mod tests {
             let (fresh, first) = BeamWalk::start(&blocks, &tr, t);
             proptest::prop_assert_eq!(first, CellBox::single(cell.map(|c| c >> 2)));
             proptest::prop_assert_eq!(steps(handed), steps(fresh));
+        }
+
+        /// The beam's cells located once ([`BeamWalk::beam_cells`]) are
+        /// those of locating both of its edges, at boundaries, beyond the
+        /// grid, and for beams as wide as cells.
+        #[test]
+        fn beam_cells_are_those_of_both_edges(
+            o in -3.0..7.0f64,
+            rel in -6.0..6.0f64,
+            on_boundary in proptest::bool::ANY,
+            delta_exp in -60i32..1,
+            boundary in 0usize..9,
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(4.0, 1.0, 1.0)),
+                [8, 1, 1],
+            );
+            let ray = Ray::new(Vec3::new(o, 0.5, 0.5), Vec3::new(1.0, 0.0, 0.0)).unwrap();
+            let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
+            let (mut w, _) = BeamWalk::start(&g, &tr, tr.t_start);
+            w.delta = 2f64.powi(delta_exp);
+            // Either anywhere, or exactly a beam's half-width off a boundary.
+            let rel = if on_boundary {
+                g.boundaries(0)[boundary] - o + rel.signum() * w.delta
+            } else {
+                rel
+            };
+            let want = (
+                g.axis_cell_relative(0, o, rel - w.delta),
+                g.axis_cell_relative(0, o, rel + w.delta),
+            );
+            proptest::prop_assert_eq!(w.beam_cells(&g, 0, rel), want);
         }
     }
 }
