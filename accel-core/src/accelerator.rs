@@ -178,12 +178,79 @@ pub trait Accelerator<T: Real>: Sync {
         self.occluded(ray)
     }
 
+    /// The nearest hit of every ray of a bundle: `out[i]` becomes
+    /// `self.intersect(&rays[i])`, bit for bit, whatever the bundle's size,
+    /// coherence or mix of directions. By default one ray at a time; a
+    /// structure that traces coherent rays together (a tile of camera rays,
+    /// rays to one light) overrides it, and its answers stay those of the
+    /// single-ray query ([`check_bundle`] states the promise).
+    ///
+    /// # Panics
+    /// If `out` and `rays` differ in length.
+    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        for (ray, answer) in rays.iter().zip(out) {
+            *answer = self.intersect(ray);
+        }
+    }
+
+    /// Whether each ray of a bundle hits anything: `out[i]` becomes
+    /// `self.occluded(&rays[i])`. By default one ray at a time, as
+    /// [`Accelerator::intersect_bundle`].
+    ///
+    /// # Panics
+    /// If `out` and `rays` differ in length.
+    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        for (ray, answer) in rays.iter().zip(out) {
+            *answer = self.occluded(ray);
+        }
+    }
+
     /// Every primitive that overlaps the closed box `region`, ascending and
     /// without repeats (an empty region gives none).
     fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError>;
 
     /// Build and shape statistics.
     fn stats(&self) -> AccelStats;
+}
+
+/// Where a bundle query's answers differ from the single-ray queries': the
+/// first ray (its index) whose nearest hit or occlusion answer differs, with
+/// both answers, or `None` when every answer is the same, bit for bit
+/// (errors too). The promise of [`Accelerator::intersect_bundle`] and
+/// [`Accelerator::occluded_bundle`], for a caller that has no reference
+/// answers of its own; the workspace's suites compare bundles with brute
+/// force directly.
+pub fn check_bundle<T: Real, A: Accelerator<T> + ?Sized>(
+    accel: &A,
+    rays: &[Ray<T>],
+) -> Option<String> {
+    let mut nearest = vec![Ok(None); rays.len()];
+    accel.intersect_bundle(rays, &mut nearest);
+    let mut any = vec![Ok(false); rays.len()];
+    accel.occluded_bundle(rays, &mut any);
+    let bits = |r: &Result<Option<Hit<T>>, QueryError>| match r {
+        Ok(h) => Ok(h.map(|h| h.bit_key())),
+        Err(e) => Err(*e),
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let single = accel.intersect(ray);
+        if bits(&nearest[i]) != bits(&single) {
+            return Some(format!(
+                "ray {i}: bundle nearest {:?}, single {single:?}",
+                nearest[i]
+            ));
+        }
+        let occluded = accel.occluded(ray);
+        if any[i] != occluded {
+            return Some(format!(
+                "ray {i}: bundle occluded {:?}, single {occluded:?}",
+                any[i]
+            ));
+        }
+    }
+    None
 }
 
 /// The four ray queries of an [`Accelerator`] impl (`intersect`, `occluded`
@@ -334,5 +401,72 @@ mod tests {
             t_max: 1.0,
         };
         assert!(minimal.occluded(&bad).is_err());
+    }
+
+    /// A structure whose bundle query loses every hit after the first ray's.
+    struct LossyBundles<'a>(Minimal<'a>);
+
+    impl Accelerator<f64> for LossyBundles<'_> {
+        fn bounds(&self) -> Aabb<f64> {
+            self.0.bounds()
+        }
+        fn intersect(&self, ray: &Ray<f64>) -> Result<Option<Hit<f64>>, QueryError> {
+            self.0.intersect(ray)
+        }
+        fn intersect_bundle(
+            &self,
+            rays: &[Ray<f64>],
+            out: &mut [Result<Option<Hit<f64>>, QueryError>],
+        ) {
+            for (i, (ray, answer)) in rays.iter().zip(out).enumerate() {
+                *answer = self.intersect(ray).map(|h| h.filter(|_| i == 0));
+            }
+        }
+        fn query_region(&self, region: &Aabb<f64>) -> Result<Vec<u32>, QueryError> {
+            self.0.query_region(region)
+        }
+        fn stats(&self) -> AccelStats {
+            self.0.stats()
+        }
+    }
+
+    #[test]
+    fn bundles_answer_as_single_rays_and_a_lossy_bundle_is_named() {
+        let mesh = TriangleMesh::new(
+            vec![
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let up = Vec3::new(0.0, 0.0, 1.0);
+        let mut rays: Vec<Ray<f64>> = [0.1, 0.2, 0.3, 0.9]
+            .iter()
+            .map(|&x| Ray::new(Vec3::new(x, 0.1, 0.0), up).unwrap())
+            .collect();
+        // An invalid ray in the bundle is refused there, as alone.
+        rays.push(Ray {
+            origin: Vec3::new(f64::NAN, 0.0, 0.0),
+            direction: up,
+            t_min: 0.0,
+            t_max: 1.0,
+        });
+        let minimal = Minimal(BruteForce::new(&mesh).unwrap());
+        assert_eq!(check_bundle(&minimal, &rays), None);
+        let mut nearest = vec![Ok(None); rays.len()];
+        minimal.intersect_bundle(&rays, &mut nearest);
+        assert_eq!(
+            nearest.iter().filter(|h| matches!(h, Ok(Some(_)))).count(),
+            3
+        );
+        assert!(nearest[4].is_err());
+        let lossy = LossyBundles(Minimal(BruteForce::new(&mesh).unwrap()));
+        let report = check_bundle(&lossy, &rays).expect("the lost hit is found");
+        assert!(
+            report.starts_with("ray 1: bundle nearest Ok(None)"),
+            "{report}"
+        );
     }
 }

@@ -116,8 +116,8 @@ pub use glam;
 
 pub use aabb::Aabb;
 pub use accelerator::{
-    AccelStats, Accelerator, CostCounter, TraversalCounters, region_matches, region_search_box,
-    validate_region,
+    AccelStats, Accelerator, CostCounter, TraversalCounters, check_bundle, region_matches,
+    region_search_box, validate_region,
 };
 pub use bounds::{SceneSurvey, bounds_survey, bounds_union, check_range, primitive_bounds};
 pub use brute::{BruteForce, SharedBruteForce};

@@ -145,6 +145,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
         each!(self, a => a.occluded_counted(ray, counters))
     }
 
+    #[inline]
+    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
+        each!(self, a => a.intersect_bundle(rays, out));
+    }
+
+    #[inline]
+    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        each!(self, a => a.occluded_bundle(rays, out));
+    }
+
     fn query_region(&self, region: &Aabb<T>) -> Result<Vec<u32>, QueryError> {
         each!(self, a => a.query_region(region))
     }

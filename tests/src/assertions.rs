@@ -209,8 +209,69 @@ pub fn check_accelerator<T: Real, P: PrimitiveSet<T> + ?Sized>(
     if let Some(f) = failure {
         return Err(f);
     }
+    check_bundles(name, acc, prims, rays, &expected.hits)?;
     for (region, want) in regions.iter().zip(&expected.regions) {
         check_region(name, acc, region, want)?;
+    }
+    Ok(())
+}
+
+/// Checks the bundle queries against brute force: the rays as one bundle
+/// (a packet-splitting override then meets a partial last packet), and in
+/// bundles of 5.
+///
+/// # Errors
+/// A message naming the accelerator, the bundle size, the ray and both
+/// answers.
+pub fn check_bundles<T: Real, P: PrimitiveSet<T> + ?Sized>(
+    name: &str,
+    acc: &dyn Accelerator<T>,
+    prims: &P,
+    rays: &[Ray<T>],
+    want: &[Option<Hit<T>>],
+) -> Result<(), String> {
+    let key = |h: Option<Hit<T>>| h.map(|h| h.bit_key());
+    for size in [rays.len().max(1), 5] {
+        let mut nearest = vec![Ok(None); rays.len()];
+        let mut any = vec![Ok(false); rays.len()];
+        for ((bundle, near), occ) in rays
+            .chunks(size)
+            .zip(nearest.chunks_mut(size))
+            .zip(any.chunks_mut(size))
+        {
+            acc.intersect_bundle(bundle, near);
+            acc.occluded_bundle(bundle, occ);
+        }
+        for (i, ray) in rays.iter().enumerate() {
+            let w = want[i];
+            let fail = |what: &str, got: String| {
+                Err(format!(
+                    "{name} ({}), bundles of {size}: {what}\n  ray  {ray:?}\n  got  {got}\n  want {w:?} ({})",
+                    T::NAME,
+                    describe(prims, w)
+                ))
+            };
+            match nearest[i] {
+                Ok(got) if key(got) == key(w) => {}
+                Ok(got) => {
+                    return fail(
+                        "intersect_bundle differs from brute force",
+                        format!("{got:?}"),
+                    );
+                }
+                Err(e) => return fail("intersect_bundle refused a valid ray", e.to_string()),
+            }
+            match any[i] {
+                Ok(got) if got == w.is_some() => {}
+                Ok(got) => {
+                    return fail(
+                        "occluded_bundle differs from brute force's hit",
+                        format!("occluded = {got}"),
+                    );
+                }
+                Err(e) => return fail("occluded_bundle refused a valid ray", e.to_string()),
+            }
+        }
     }
     Ok(())
 }
@@ -233,7 +294,12 @@ pub fn check_refused<T: Real>(
         ));
     }
     let mut c = TraversalCounters::default();
+    let (mut nearest, mut any) = ([Ok(None)], [Ok(false)]);
+    acc.intersect_bundle(core::slice::from_ref(ray), &mut nearest);
+    acc.occluded_bundle(core::slice::from_ref(ray), &mut any);
     let answers = [
+        ("intersect_bundle", nearest[0].map(|h| format!("{h:?}"))),
+        ("occluded_bundle", any[0].map(|o| format!("{o}"))),
         ("intersect", acc.intersect(ray).map(|h| format!("{h:?}"))),
         ("occluded", acc.occluded(ray).map(|o| format!("{o}"))),
         (

@@ -9,7 +9,8 @@ mod scenes;
 mod watertight;
 
 pub use rays::{
-    INDEX_RANGE, boxes, boxes_in, dir3, ray, ray_in, rays_and_windows, unit, unit3, window,
+    INDEX_RANGE, boxes, boxes_in, coherent_tile, dir3, ray, ray_in, rays_and_windows, unit, unit3,
+    window,
 };
 pub use scenes::{
     closed_shape, extreme_placement, far_offsets, mixed_item, ordinary_placement, scene, tri,

@@ -135,3 +135,59 @@ pub fn boxes_in(max_index: usize) -> BoxedStrategy<BoxSpec> {
     ]
     .boxed()
 }
+
+/// A coherent bundle, as a renderer traces one: a tile of up to 8 × 8 rays
+/// from one origin whose directions fan out by `2^-spread` around a centre,
+/// each with its own window. One centre component is drawn near zero in a
+/// third of the tiles, so that the fan crosses it and the bundle mixes
+/// directions' signs; some rays force a component to ±0 (`zero`, as in
+/// [`RaySpec::Random`]).
+pub fn coherent_tile() -> BoxedStrategy<Vec<(RaySpec, WindowSpec)>> {
+    (
+        unit3(),
+        dir3(),
+        (1usize..=8, 1usize..=8),
+        2i32..12,
+        (any::<bool>(), 0usize..3),
+        (0usize..64, [0u8..3, 0u8..3, 0u8..3]),
+        prop::collection::vec(window(), 64),
+    )
+        .prop_map(
+            |(origin, centre, (w, h), spread, (straddle, axis), (every, zero), windows)| {
+                let s = 2f64.powi(-spread);
+                let mut centre = centre;
+                if straddle {
+                    centre[axis] = 0.25 * s;
+                }
+                let mut tile = Vec::with_capacity(w * h);
+                for j in 0..h {
+                    for i in 0..w {
+                        let (di, dj) = (i as f64 - w as f64 / 2.0, j as f64 - h as f64 / 2.0);
+                        let dir = [
+                            centre[0] + s * di,
+                            centre[1] + s * dj,
+                            centre[2] + s * 0.5 * (di - dj),
+                        ];
+                        let k = i + w * j;
+                        // Every `every`-th ray (none when 0) forces zeros.
+                        let zero = if every > 0 && k % every == 0 {
+                            zero
+                        } else {
+                            [0; 3]
+                        };
+                        tile.push((
+                            RaySpec::Random {
+                                origin,
+                                dir,
+                                zero,
+                                len_exp: 0,
+                            },
+                            windows[k].clone(),
+                        ));
+                    }
+                }
+                tile
+            },
+        )
+        .boxed()
+}
