@@ -182,7 +182,7 @@ pub fn coherent_tile() -> BoxedStrategy<Vec<(RaySpec, WindowSpec)>> {
                                 zero,
                                 len_exp: 0,
                             },
-                            windows[k].clone(),
+                            windows[k],
                         ));
                     }
                 }
