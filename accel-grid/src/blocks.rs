@@ -137,6 +137,26 @@ impl<T: Real> Blocks<T> {
         !self.occupied[self.geometry.linear_index(c.map(|i| i >> self.shift))]
     }
 
+    /// `log2` of the cells per block along each axis.
+    #[inline]
+    pub(crate) fn shift(&self) -> u32 {
+        self.shift
+    }
+
+    /// Whether any block of layer `layer` across axis `k` (`axes[0]`)
+    /// under the rectangle `hull` (lowest and highest coordinates on
+    /// `axes[1]` and `axes[2]`) holds something.
+    #[inline]
+    pub(crate) fn any_occupied_under(&self, axes: [usize; 3], layer: u32, hull: &[T; 4]) -> bool {
+        let [k, u, v] = axes;
+        let g = &self.geometry;
+        let mut range = CellBox::single([0; 3]);
+        (range.lo[k], range.hi[k]) = (layer, layer);
+        (range.lo[u], range.hi[u]) = (g.axis_cell(u, hull[0]), g.axis_cell(u, hull[1]));
+        (range.lo[v], range.hi[v]) = (g.axis_cell(v, hull[2]), g.axis_cell(v, hull[3]));
+        self.any_occupied(&range)
+    }
+
     /// Whether any block of `range` (block coordinates) holds something.
     #[inline]
     fn any_occupied(&self, range: &CellBox) -> bool {

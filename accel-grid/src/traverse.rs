@@ -1,5 +1,6 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
+use crate::bundle::{Answer, PACKET};
 use crate::dda::{BeamWalk, Step};
 use crate::grid::{Grid, GridPart};
 use accel_core::packed::for_each_candidate;
@@ -65,7 +66,7 @@ impl<T: Real> GridPart<T> {
     /// [`GridPart::nearest_with`], reading occupancy bits and skipping
     /// empty blocks where the part keeps them.
     #[inline]
-    fn nearest<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
+    pub(crate) fn nearest<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
         &self,
         prims: &P,
         tr: &TraversalRay<T>,
@@ -83,7 +84,7 @@ impl<T: Real> GridPart<T> {
     /// [`GridPart::any_with`], reading occupancy bits and skipping empty
     /// blocks where the part keeps them.
     #[inline]
-    fn any<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
+    pub(crate) fn any<P: PrimitiveSet<T> + ?Sized, C: CostCounter>(
         &self,
         prims: &P,
         tr: &TraversalRay<T>,
@@ -221,6 +222,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
         }))
     }
 
+    /// Whether bundles go by packets ([`crate::bundle`]): a grid of one
+    /// part with empty-space blocks.
+    fn packets_pay(&self) -> bool {
+        !self.empty && self.rest.is_empty() && self.first.blocks.is_some()
+    }
+
     /// Whether anything is hit, part by part.
     fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
         ray.validate()?;
@@ -254,6 +261,53 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     }
 
     accel_core::ray_queries_from_walks!();
+
+    /// Packets of up to [`crate::bundle::PACKET`] rays walked together
+    /// slice by slice ([`crate::bundle`]) where that pays: on a grid with
+    /// empty-space blocks (at least half its blocks empty), where a
+    /// packet's slices are mostly empty. A grid of several parts, or one
+    /// whose cells are mostly full (the 100k random soup: packets 0.6× as
+    /// fast as single rays, each ray's rectangle being computed in every
+    /// slice), answers one ray at a time.
+    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        if !self.packets_pay() {
+            for (ray, answer) in rays.iter().zip(out) {
+                *answer = self.nearest(ray, &mut ());
+            }
+            return;
+        }
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            self.first
+                .packet::<false, P>(self.primitives(), rays, |i, a| {
+                    out[i] = a.map(|a| match a {
+                        Answer::Nearest(h) => h,
+                        Answer::Any(_) => unreachable!("a nearest-hit packet answers hits"),
+                    });
+                });
+        }
+    }
+
+    /// As [`Accelerator::intersect_bundle`], stopping each ray at its first
+    /// hit.
+    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        if !self.packets_pay() {
+            for (ray, answer) in rays.iter().zip(out) {
+                *answer = self.any(ray, &mut ());
+            }
+            return;
+        }
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            self.first
+                .packet::<true, P>(self.primitives(), rays, |i, a| {
+                    out[i] = a.map(|a| match a {
+                        Answer::Any(b) => b,
+                        Answer::Nearest(h) => h.is_some(),
+                    });
+                });
+        }
+    }
 
     /// Gathers the references of every cell near the region (grown by a
     /// rounding allowance, so that a primitive the exact test accepts is never
