@@ -3,7 +3,8 @@
 //! throughputs on this thread (a driver for profilers and for quick
 //! comparisons; `render bench` is the benchmark).
 //!
-//! Usage: `bundles [SCENE] [camera|random] [RAYS]` (as `trace`).
+//! Usage: `bundles [SCENE] [camera|random] [RAYS] [RAY FILE]` (as `trace`;
+//! a ray file written by `render bench --write-rays` replaces the rays).
 
 use accel_core::{Accelerator, Hit, QueryError, Ray};
 use accel_grid::Grid;
@@ -31,7 +32,11 @@ fn main() {
         std::process::exit(2);
     });
     let grid = Grid::new(&run.mesh).expect("grid builds");
-    let rays = run.rays();
+    // A ray file as fourth argument replaces the generated rays.
+    let rays = match std::env::args().nth(4) {
+        Some(f) => accel_scenes::rayfile::read(std::path::Path::new(&f)).expect("ray file"),
+        None => run.rays(),
+    };
     let side = (rays.len() as f64).sqrt() as usize;
     let rays = if side * side == rays.len() {
         tiled(&rays, side)

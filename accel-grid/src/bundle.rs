@@ -25,12 +25,22 @@
 //! walk's answer. Rays that do not suit the packet (another main axis or
 //! sign, a tiny main component) take the single walk.
 
+use crate::cells::GridGeometry;
 use crate::grid::GridPart;
 use accel_core::packed::for_each_candidate;
 use accel_core::{Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real, TraversalRay, nearer};
 
 /// Rays walked together at most; larger bundles are cut into packets.
 pub const PACKET: usize = 64;
+
+/// Fewer rays than this (of a packet, once those going another way are
+/// left to the single walk) are not walked together: the slice walk's
+/// fixed costs need company to pay.
+pub const MIN_PACKET: usize = 16;
+
+/// How far apart (in cells) a packet's beams may spread across the grid
+/// and still be walked together ([`Lines::coherent`]).
+pub const COHERENT_CELLS: f64 = 8.0;
 
 /// A ray of a packet and its walk's state.
 struct Member<T: Real> {
@@ -205,6 +215,31 @@ impl<T: Real> Lines<T> {
     }
 }
 
+/// Whether the members' rays stay within [`COHERENT_CELLS`] cells of each
+/// other across the grid: on each cross axis, the spread of their lines
+/// where they enter and where they leave the grid's depth along `axes[0]`,
+/// in cells. A tile of camera rays does, diffuse rays leaving a surface do
+/// not, and walking those together would open most of every slice for each
+/// of them. (A choice of speed only: any packet is answered exactly.)
+fn coherent<T: Real>(members: &[Member<T>], geom: &GridGeometry<T>, [k, u, v]: [usize; 3]) -> bool {
+    let b = geom.bounds();
+    let n = geom.resolution();
+    let cell = |a: usize| (b.max[a] - b.min[a]) / T::from_usize(n[a] as usize);
+    let limits = [u, v].map(|a| cell(a) * T::from_f64(COHERENT_CELLS));
+    [b.min[k], b.max[k]].iter().all(|&x| {
+        let mut span = [[T::INFINITY, T::NEG_INFINITY]; 2];
+        for m in members {
+            let r = m.tr.ray();
+            let t = (x - r.origin[k]) * m.tr.prepared.inv_dir[k];
+            for (j, &a) in [u, v].iter().enumerate() {
+                let p = r.origin[a] + r.direction[a] * t;
+                span[j] = [min(span[j][0], p), max(span[j][1], p)];
+            }
+        }
+        (0..2).all(|j| span[j][1] - span[j][0] <= limits[j])
+    })
+}
+
 #[inline]
 fn min<T: Real>(a: T, b: T) -> T {
     if b < a { b } else { a }
@@ -292,7 +327,20 @@ impl<T: Real> GridPart<T> {
         if members.is_empty() {
             return;
         }
-        self.walk_slices::<ANY, P>(prims, &mut members, k, up);
+        if !self.walk_slices::<ANY, P>(prims, &mut members, k, up) {
+            // Too divergent to walk together: one at a time.
+            for m in members {
+                answer(
+                    m.slot,
+                    Ok(if ANY {
+                        Answer::Any(self.any(prims, &m.tr, &mut ()))
+                    } else {
+                        Answer::Nearest(self.nearest(prims, &m.tr, None, &mut ()))
+                    }),
+                );
+            }
+            return;
+        }
         for m in members {
             answer(
                 m.slot,
@@ -305,14 +353,16 @@ impl<T: Real> GridPart<T> {
         }
     }
 
-    /// The slice walk of a packet along main axis `k` (`up`: increasing).
+    /// The slice walk of a packet along main axis `k` (`up`: increasing);
+    /// `false`, with nothing done, when the packet is too divergent for it
+    /// ([`Lines::coherent`]).
     fn walk_slices<const ANY: bool, P: PrimitiveSet<T> + ?Sized>(
         &self,
         prims: &P,
         members: &mut [Member<T>],
         k: usize,
         up: bool,
-    ) {
+    ) -> bool {
         let axes = [k, (k + 1) % 3, (k + 2) % 3];
         let geom = &self.geometry;
         let n = geom.resolution()[k];
@@ -332,8 +382,11 @@ impl<T: Real> GridPart<T> {
             None => (0, None),
         };
         let Some(mut lines) = Lines::of(members, axes) else {
-            return;
+            return true;
         };
+        if members.len() < MIN_PACKET || !coherent(members, geom, axes) {
+            return false;
+        }
         let mut active = members.iter().filter(|m| !m.done).count();
         let mut rects: Vec<Option<[T; 4]>> = vec![None; members.len()];
         let mut cells: Vec<Cell<'_, T>> = Vec::new();
@@ -374,11 +427,12 @@ impl<T: Real> GridPart<T> {
                     active = now;
                     match Lines::of(members, axes) {
                         Some(l) => lines = l,
-                        None => return,
+                        None => return true,
                     }
                 }
             }
         }
+        true
     }
 
     /// The cells of slice `i` (across `axes[0]`) under `hull` that hold

@@ -516,6 +516,7 @@ fn bench_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
             vec![RaySet {
                 kind: RayKind::File,
                 rays: rays.iter().map(accel_core::Ray::cast).collect(),
+                image_width: None,
             }],
             args.rays
                 .as_deref()

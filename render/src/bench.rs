@@ -80,6 +80,35 @@ pub struct RaySet<T> {
     pub kind: RayKind,
     /// The rays.
     pub rays: Vec<Ray<T>>,
+    /// For the rays of an image, row by row: its width. The bundle passes
+    /// of [`measure_set`] then trace them by tiles of [`TILE`] × [`TILE`]
+    /// pixels, as a renderer would.
+    pub image_width: Option<u32>,
+}
+
+/// The side of the tiles the bundle passes trace an image's rays by.
+pub const TILE: usize = 8;
+
+/// `items` of an image `width` wide, row by row, reordered tile by tile
+/// (`tile` × `tile` pixels, row by row within a tile; the tiles of the
+/// last rows and columns cut short).
+#[must_use]
+pub fn by_tiles<T: Copy>(items: &[T], width: usize, tile: usize) -> Vec<T> {
+    let width = width.max(1);
+    let height = items.len().div_ceil(width);
+    let mut out = Vec::with_capacity(items.len());
+    for ty in (0..height).step_by(tile) {
+        for tx in (0..width).step_by(tile) {
+            for y in ty..(ty + tile).min(height) {
+                for x in tx..(tx + tile).min(width) {
+                    if let Some(&item) = items.get(y * width + x) {
+                        out.push(item);
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The structure that makes generated rays ([`generate_rays`]): any gives
@@ -163,14 +192,17 @@ pub fn generate_rays_from<T: Real>(
         RaySet {
             kind: RayKind::Primary,
             rays: primary,
+            image_width: Some(width),
         },
         RaySet {
             kind: RayKind::Shadow,
             rays: shadow,
+            image_width: None,
         },
         RaySet {
             kind: RayKind::Diffuse,
             rays: diffuse,
+            image_width: None,
         },
     ];
     Ok(GeneratedRays {
@@ -265,6 +297,45 @@ pub struct SetResult {
     pub mrays_one_thread: f64,
     /// Millions of rays per second on all threads.
     pub mrays_all_threads: f64,
+    /// Millions of rays per second on one thread through the bundle
+    /// queries ([`Accelerator::intersect_bundle`],
+    /// [`Accelerator::occluded_bundle`]), [`BUNDLE`] rays at a time: an
+    /// image's rays by tiles ([`RaySet::image_width`]), others in the set's
+    /// order (shadow and diffuse rays of neighbouring pixels of a row).
+    pub mrays_bundles_one_thread: f64,
+}
+
+/// Rays per bundle in [`measure_set`]'s bundle passes.
+pub const BUNDLE: usize = 64;
+
+/// Hits of one uncounted pass through the bundle queries, [`BUNDLE`] rays
+/// at a time, on this thread.
+///
+/// # Errors
+/// The first ray refused.
+pub fn count_bundle_hits<T: Real>(
+    accel: &dyn Accelerator<T>,
+    any_hit: bool,
+    rays: &[Ray<T>],
+) -> Result<u64, QueryError> {
+    let mut hits = 0;
+    let mut nearest = [Ok(None); BUNDLE];
+    let mut any = [Ok(false); BUNDLE];
+    for bundle in rays.chunks(BUNDLE) {
+        let n = bundle.len();
+        if any_hit {
+            accel.occluded_bundle(bundle, &mut any[..n]);
+            for a in &any[..n] {
+                hits += u64::from((*a)?);
+            }
+        } else {
+            accel.intersect_bundle(bundle, &mut nearest[..n]);
+            for a in &nearest[..n] {
+                hits += u64::from(a.as_ref().map_err(|e| *e)?.is_some());
+            }
+        }
+    }
+    Ok(hits)
 }
 
 /// The figures of one accelerator.
@@ -536,6 +607,20 @@ pub fn measure_set<T: Real>(
     })
     .map_err(query_error)?;
     check(timed_hits)?;
+    let tiled;
+    let bundled = match set.image_width {
+        Some(w) => {
+            tiled = by_tiles(&set.rays, w as usize, TILE);
+            &tiled
+        }
+        None => &set.rays,
+    };
+    let bundles = time_passes(min_time, || {
+        timed_hits = count_bundle_hits(accel, any_hit, bundled)?;
+        Ok(())
+    })
+    .map_err(query_error)?;
+    check(timed_hits)?;
     Ok(SetResult {
         kind: set.kind,
         query: if any_hit { "occluded" } else { "intersect" },
@@ -545,6 +630,7 @@ pub fn measure_set<T: Real>(
         tests_per_ray: work.prims as f64 / n,
         mrays_one_thread: rays_per_second(set.rays.len(), one),
         mrays_all_threads: rays_per_second(set.rays.len(), all),
+        mrays_bundles_one_thread: rays_per_second(set.rays.len(), bundles),
     })
 }
 
@@ -607,7 +693,7 @@ pub fn disagreement(results: &[AccelResult]) -> Option<String> {
 #[must_use]
 pub fn table_header(threads: usize) -> String {
     format!(
-        "{:<7} {:>9} {:>8}  {:<8} {:>9} {:>9} {:>10} {:>10} {:>9} {:>9} {:>15}  {:<16}",
+        "{:<7} {:>9} {:>8}  {:<8} {:>9} {:>9} {:>10} {:>10} {:>10} {:>9} {:>9} {:>15}  {:<16}",
         "accel",
         "build ms",
         "MiB",
@@ -616,6 +702,7 @@ pub fn table_header(threads: usize) -> String {
         "hits",
         "Mrays/s 1T",
         format!("Mrays/s {threads}T"),
+        "bundles 1T",
         "nodes/ray",
         "tests/ray",
         "t sum",
@@ -640,7 +727,7 @@ pub fn table_rows(r: &AccelResult) -> Vec<String> {
                 (String::new(), String::new(), String::new())
             };
             format!(
-                "{:<7} {:>9} {:>8}  {:<8} {:>9} {:>9} {:>10.2} {:>10.2} {:>9.1} {:>9.1} {:>15}  {:016x}",
+                "{:<7} {:>9} {:>8}  {:<8} {:>9} {:>9} {:>10.2} {:>10.2} {:>10.2} {:>9.1} {:>9.1} {:>15}  {:016x}",
                 name,
                 build,
                 mib,
@@ -649,6 +736,7 @@ pub fn table_rows(r: &AccelResult) -> Vec<String> {
                 s.answers.hits,
                 s.mrays_one_thread,
                 s.mrays_all_threads,
+                s.mrays_bundles_one_thread,
                 s.nodes_per_ray,
                 s.tests_per_ray,
                 s.answers.t_sum.map_or("-".to_owned(), |t| format!("{t:.9e}")),
@@ -662,6 +750,23 @@ pub fn table_rows(r: &AccelResult) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::scene::default_scene;
+
+    #[test]
+    fn tiles_cover_the_image_once_in_tile_order() {
+        let pixels: Vec<u32> = (0..30).collect();
+        let tiled = by_tiles(&pixels, 10, 4);
+        // Three rows: tiles of 4 × 3, 4 × 3 and the last 2 × 3.
+        let want: Vec<u32> = [0, 1, 2, 3, 10, 11, 12, 13, 20, 21, 22, 23]
+            .into_iter()
+            .chain([4, 5, 6, 7, 14, 15, 16, 17, 24, 25, 26, 27])
+            .chain([8, 9, 18, 19, 28, 29])
+            .collect();
+        assert_eq!(tiled, want);
+        // A ragged last row is kept, once.
+        let mut ragged = by_tiles(&pixels[..27], 10, 8);
+        ragged.sort_unstable();
+        assert_eq!(ragged, pixels[..27]);
+    }
 
     #[test]
     fn ray_sets_follow_the_primary_hits() {

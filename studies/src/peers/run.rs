@@ -440,6 +440,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
             vec![RaySet {
                 kind: RayKind::File,
                 rays,
+                image_width: None,
             }],
             args.rays
                 .as_deref()
