@@ -103,6 +103,10 @@ pub struct KdTreeParams {
     pub binned_above: usize,
     /// Bins per axis of the binned SAH, 2 to 4096. Default 64.
     pub bins: u32,
+    /// With `binned_above` 0: straddling primitives are clipped to each
+    /// child exactly (perfect splits) in nodes over this many primitives;
+    /// in smaller ones their boxes are cut at the plane. Default 0.
+    pub clip_above: usize,
     /// Whether a scene that stays one part, with many primitives lying flat
     /// in one axis-aligned plane (a floor), builds them as a part of their
     /// own ([`accel_core::parts::split_flat`]), where primitives with wide
@@ -123,7 +127,7 @@ pub struct KdTreeParams {
 const PBRT_DEPTH_BASE: f64 = 8.0;
 
 /// [`KdTreeParams::fast_build`]'s depth limit constant: two levels fewer.
-const FAST_BUILD_DEPTH_BASE: f64 = 6.0;
+const FAST_BUILD_DEPTH_BASE: f64 = 3.0;
 
 impl Default for KdTreeParams {
     fn default() -> Self {
@@ -139,6 +143,7 @@ impl Default for KdTreeParams {
             parallel_threshold: 4096,
             binned_above: 4096,
             bins: 64,
+            clip_above: 0,
             flat_part: true,
             layout: Layout::Indexed,
         }
@@ -159,9 +164,12 @@ impl KdTreeParams {
     #[must_use]
     pub fn fast_build() -> Self {
         Self {
-            leaf_size: 4,
+            leaf_size: 8,
             traversal_cost: 2.0,
             depth_base: FAST_BUILD_DEPTH_BASE,
+            binned_above: 0,
+            bins: 32,
+            clip_above: 256,
             ..Self::default()
         }
     }
@@ -282,12 +290,12 @@ mod tests {
             // 2^20: 8 + 26 = 34.
             assert_eq!(p.depth_limit(1 << 20), 34);
         }
-        // The same rule with the fast-build preset's constant, 6.
+        // The same rule with the fast-build preset's constant, 3.
         let p = KdTreeParams::fast_build();
-        assert_eq!(p.depth_limit(1), 6);
-        // 6 + 11.7 = 17.7 -> 18; 6 + 26 = 32.
-        assert_eq!(p.depth_limit(1000), 18);
-        assert_eq!(p.depth_limit(1 << 20), 32);
+        assert_eq!(p.depth_limit(1), 3);
+        // 3 + 11.7 = 14.7 -> 15; 3 + 26 = 29.
+        assert_eq!(p.depth_limit(1000), 15);
+        assert_eq!(p.depth_limit(1 << 20), 29);
         // Far below: a single leaf; far above: the traversal stack.
         let low = KdTreeParams {
             depth_base: -100.0,
