@@ -2,7 +2,8 @@
 //! the uniform grid, on each generated scene (for tuning and profiling):
 //! `cargo run --release -p accel-kdtree --example ray_costs [scene-name|FILE.glb]`
 //! (a glTF file is framed from the same side as the generated meshes)
-//! (`ONLY=kdtree-default` traces one structure, e.g. under callgrind).
+//! (`ONLY=kdtree-default` traces one structure, `ONLY=a,b` those two, e.g. under callgrind; the
+//! `KD_*` variables of `build_profile` change `kdtree-fast_build`).
 
 use accel_core::{Accelerator, TraversalCounters, TriangleMesh};
 use accel_grid::Grid;
@@ -10,9 +11,10 @@ use accel_kdtree::{KdTree, KdTreeParams};
 use accel_scenes::{Camera, GeneratedScene};
 use std::time::Instant;
 
-/// Whether `ONLY` (if set) names this structure; others are not even built.
+/// Whether `ONLY` (if set: names, comma-separated) names this structure;
+/// others are not even built.
 fn wanted(name: &str) -> bool {
-    std::env::var("ONLY").map_or(true, |o| o == name)
+    std::env::var("ONLY").map_or(true, |o| o.split(',').any(|o| o == name))
 }
 
 #[inline(never)]
@@ -64,6 +66,25 @@ fn env_params(n: usize) -> KdTreeParams {
     }
 }
 
+/// [`KdTreeParams::fast_build`] with `KD_LEAF_SIZE`, `KD_TRAVERSAL_COST`,
+/// `KD_DEPTH_BASE`, `KD_CLIP_ABOVE`, `KD_BINS` and `KD_BINNED_ABOVE` in
+/// place of its values where set (the names `build_profile` reads).
+fn fast_params() -> KdTreeParams {
+    fn get<V: std::str::FromStr>(k: &str) -> Option<V> {
+        std::env::var(k).ok().and_then(|s| s.parse().ok())
+    }
+    let p = KdTreeParams::fast_build();
+    KdTreeParams {
+        leaf_size: get("KD_LEAF_SIZE").unwrap_or(p.leaf_size),
+        traversal_cost: get("KD_TRAVERSAL_COST").unwrap_or(p.traversal_cost),
+        depth_base: get("KD_DEPTH_BASE").unwrap_or(p.depth_base),
+        clip_above: get("KD_CLIP_ABOVE").unwrap_or(p.clip_above),
+        bins: get("KD_BINS").unwrap_or(p.bins),
+        binned_above: get("KD_BINNED_ABOVE").unwrap_or(p.binned_above),
+        ..p
+    }
+}
+
 fn main() {
     let only = std::env::args().nth(1);
     if let Some(path) = only
@@ -109,7 +130,7 @@ fn structures(mesh: &TriangleMesh<f32>, rays: &[accel_core::Ray<f32>], grid: boo
             },
         ),
         ("kdtree-pbrt", KdTreeParams::pbrt()),
-        ("kdtree-fast_build", KdTreeParams::fast_build()),
+        ("kdtree-fast_build", fast_params()),
         ("kdtree-best_traversal", KdTreeParams::best_traversal()),
         ("kdtree-env", env_params(mesh.triangle_count())),
     ] {

@@ -29,7 +29,11 @@
 //! volume hierarchies", IEEE RT 2007), which spares the whole-scene sort; the
 //! sweep takes over below. Subtrees are built in parallel with rayon. A naive O(n²)
 //! builder with the same candidates and costs is kept as the reference the
-//! sweep must match node for node.
+//! sweep must match node for node. The fast build
+//! ([`KdTreeParams::fast_build`], `binned_above` 0) bins every node and
+//! makes no events at all (Shevtsov, Soupikov & Kapustin 2007 bin all the
+//! way down as well): its nodes are runs of indices and clipped boxes,
+//! partitioned in place.
 //!
 //! **Large primitives.** A plane in a node's face is a candidate where
 //! primitives lie flat in that face (a *face cut*: they go to a flat child

@@ -4,6 +4,7 @@
 pub(crate) mod binned;
 pub(crate) mod depth;
 pub(crate) mod events;
+mod fast;
 pub(crate) mod sah;
 pub(crate) mod spares;
 pub(crate) mod split;
@@ -570,6 +571,8 @@ fn build_part<T: Real, P: PrimitiveSet<T> + ?Sized>(
     if naive {
         crate::naive::build_naive(ctx, &list, &boxes, bounds, &mut out);
         unstored::drop_empty_leaves(&mut out);
+    } else if ctx.params.binned_above == 0 {
+        join(fast::build_fast(ctx, &list, &boxes, bounds), &mut out)?;
     } else if list.len() > ctx.params.binned_above {
         let root = BinnedNode {
             bounds,

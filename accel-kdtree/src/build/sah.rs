@@ -101,6 +101,19 @@ impl Sah {
         })
     }
 
+    /// Per split axis `k`: the product and the sum of the two other
+    /// extents (a child's half area is `product + sum · width`).
+    #[inline]
+    pub(crate) fn cross_sum(&self, k: usize) -> (f64, f64) {
+        (self.cross[k], self.sum[k])
+    }
+
+    /// `1 − empty_bonus`: the factor of a split with an empty side.
+    #[inline]
+    pub(crate) fn keep(&self) -> f64 {
+        self.keep
+    }
+
     /// The cost of a leaf of `n` primitives.
     #[inline]
     pub(crate) fn leaf_cost(&self, n: usize) -> f64 {

@@ -68,7 +68,13 @@
 //!   the default's on triangles), so it is the kD-tree candidate; since
 //!   (docs/choose-bench-2026-12-02.txt, -2026-12-03.txt) it is within 10% on every final
 //!   render, and on previews of the scans the pbrt preset builds faster
-//!   and leads the kD-trees by up to 1.5×, where a grid wins anyway;
+//!   and leads the kD-trees by up to 1.5×, where a grid wins anyway. Those
+//!   runs predate the preset's binned build (2026-12-06), which builds
+//!   5–9× faster (2× on the 1M terrain) and traces 0.73–0.99× as fast as
+//!   the default kD-tree; its
+//!   build is still predicted from a subsample by `n log n` and its rays
+//!   timed on the probe, so the estimates follow the new costs, but the
+//!   choose-bench runs have not been repeated;
 //! - the octree's two-level preset builds about 4× faster than the default
 //!   on "teapot in a stadium" (1.3× since the octree builds the sphere
 //!   apart) and wins its small budget.

@@ -44,13 +44,31 @@ const EXAMPLES: usize = 3;
 /// Rays of the sample that estimates a pass's time.
 const PROBE_RAYS: usize = 1000;
 
-/// Our accelerators, in report order.
-const OURS: [AccelKind; 3] = [AccelKind::Grid, AccelKind::Octree, AccelKind::KdTree];
+/// The tool name of our kD-tree's fast-build preset
+/// ([`accel::KdTreeParams::fast_build`], `kdtree fast-build`).
+pub const KDTREE_FAST: &str = "kdtree-fast";
+
+/// Our tools in report order, by name: each structure with its default
+/// parameters (named as the structure), then the kD-tree's fast-build
+/// preset ([`KDTREE_FAST`]).
+fn ours() -> [(&'static str, AccelConfig); 4] {
+    let default = |k: AccelKind| (k.name(), AccelConfig::default_for(k));
+    [
+        default(AccelKind::Grid),
+        default(AccelKind::Octree),
+        default(AccelKind::KdTree),
+        (
+            KDTREE_FAST,
+            AccelConfig::KdTree(accel::KdTreeParams::fast_build()),
+        ),
+    ]
+}
 
 /// Every tool `--tools` may name: ours, then the peers in report order.
 fn tool_names() -> Vec<&'static str> {
-    OURS.iter()
-        .map(|k| k.name())
+    ours()
+        .iter()
+        .map(|(name, _)| *name)
         .chain(super::peer_kinds().iter().map(|p| p.name))
         .collect()
 }
@@ -97,8 +115,8 @@ pub struct PeersArgs {
     /// Write the results as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
-    /// Only these tools, comma-separated (ours: grid, octree, kdtree; the
-    /// peers: obvhs, parry3d, bvh, embree, embree-robust); every one by
+    /// Only these tools, comma-separated (ours: grid, octree, kdtree,
+    /// kdtree-fast, the kD-tree's fast-build preset; the peers: obvhs, parry3d, bvh, embree, embree-robust); every one by
     /// default. The first one measured on a set is the reference of the
     /// agreement check.
     #[arg(long, value_name = "TOOLS", value_delimiter = ',', value_parser = PossibleValuesParser::new(tool_names()))]
@@ -211,14 +229,15 @@ pub struct PeersReport {
 
 /// A tool under test.
 enum Tool<'a> {
-    Ours(AccelKind, Box<dyn Accelerator<f32> + 'a>),
+    /// Ours: the tool's name and the structure.
+    Ours(&'static str, Box<dyn Accelerator<f32> + 'a>),
     Peer(&'static str, Box<dyn super::Tracer>),
 }
 
 impl Tool<'_> {
     fn name(&self) -> &'static str {
         match self {
-            Tool::Ours(k, _) => k.name(),
+            Tool::Ours(name, _) => name,
             Tool::Peer(n, _) => n,
         }
     }
@@ -308,7 +327,7 @@ pub fn run(args: &PeersArgs) -> Result<()> {
 
 /// What [`build_all`] built.
 struct Built<'a> {
-    /// Ours (grid, octree, kD-tree), then the peers that built, from the
+    /// Ours ([`ours`]), then the peers that built, from the
     /// first round.
     tools: Vec<Tool<'a>>,
     /// Each tool's median build time over the rounds.
@@ -340,7 +359,8 @@ fn build_all<'m>(
     let mut times: Vec<(&'static str, bool, Vec<Duration>)> = Vec::new();
     let mut unavailable = Vec::new();
     let mut failed = Vec::new();
-    let ours: Vec<AccelKind> = OURS.into_iter().filter(|k| wants(k.name())).collect();
+    let ours: Vec<(&'static str, AccelConfig)> =
+        ours().into_iter().filter(|(name, _)| wants(name)).collect();
     for round in 0..rounds {
         let first = round == 0;
         let mut record = |name: &'static str, is_ours: bool, d: Duration| match times
@@ -350,15 +370,15 @@ fn build_all<'m>(
             Some(t) => t.2.push(d),
             None => times.push((name, is_ours, vec![d])),
         };
-        for &kind in &ours {
+        for (name, config) in &ours {
             // Every timed build follows an untimed one of the same tool
             // (see the function's comment).
-            drop(accel::build_config(&AccelConfig::default_for(kind), mesh)?);
+            drop(accel::build_config(config, mesh)?);
             let start = Instant::now();
-            let accel = accel::build_config(&AccelConfig::default_for(kind), mesh)?;
-            record(kind.name(), true, start.elapsed());
+            let accel = accel::build_config(config, mesh)?;
+            record(name, true, start.elapsed());
             if first {
-                tools.push(Tool::Ours(kind, accel.into_dyn()));
+                tools.push(Tool::Ours(name, accel.into_dyn()));
             }
         }
         for PeerKind {
@@ -450,7 +470,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
             // The generator measured here, or one built for the rays when
             // `--tools` leaves it out.
             let measured = tools.iter().find_map(|t| match t {
-                Tool::Ours(k, a) if *k == bench::RAY_GENERATOR => Some(a.as_ref()),
+                Tool::Ours(name, a) if *name == bench::RAY_GENERATOR.name() => Some(a.as_ref()),
                 _ => None,
             });
             let own;
@@ -728,8 +748,8 @@ mod tests {
     #[test]
     fn tool_names_are_ours_then_every_peer_once() {
         let names = tool_names();
-        assert_eq!(&names[..3], ["grid", "octree", "kdtree"]);
-        assert_eq!(names.len(), 3 + super::super::peer_kinds().len());
+        assert_eq!(&names[..4], ["grid", "octree", "kdtree", KDTREE_FAST]);
+        assert_eq!(names.len(), 4 + super::super::peer_kinds().len());
         let mut unique = names.clone();
         unique.sort_unstable();
         unique.dedup();
