@@ -346,6 +346,19 @@ mod tests {
     use super::*;
     use crate::{BruteForce, TriangleMesh, Vec3};
 
+    /// One triangle over the unit corner at height 1.
+    fn one_triangle() -> TriangleMesh<f64> {
+        TriangleMesh::new(
+            vec![
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .unwrap()
+    }
+
     /// A user's structure implementing only what the trait requires, over
     /// brute force's nearest hit.
     struct Minimal<'a>(BruteForce<'a, f64, TriangleMesh<f64>>);
@@ -367,15 +380,7 @@ mod tests {
 
     #[test]
     fn the_default_queries_follow_intersect_and_count_nothing() {
-        let mesh = TriangleMesh::new(
-            vec![
-                Vec3::new(0.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, 1.0),
-                Vec3::new(0.0, 1.0, 1.0),
-            ],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let mesh = one_triangle();
         let minimal = Minimal(BruteForce::new(&mesh).unwrap());
         let brute = BruteForce::new(&mesh).unwrap();
         let up = Vec3::new(0.0, 0.0, 1.0);
@@ -432,15 +437,7 @@ mod tests {
 
     #[test]
     fn bundles_answer_as_single_rays_and_a_lossy_bundle_is_named() {
-        let mesh = TriangleMesh::new(
-            vec![
-                Vec3::new(0.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, 1.0),
-                Vec3::new(0.0, 1.0, 1.0),
-            ],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let mesh = one_triangle();
         let up = Vec3::new(0.0, 0.0, 1.0);
         let mut rays: Vec<Ray<f64>> = [0.1, 0.2, 0.3, 0.9]
             .iter()

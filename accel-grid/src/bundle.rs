@@ -181,13 +181,13 @@ impl<T: Real> Lines<T> {
                 m_mag: T::ZERO,
             });
             for (j, (c, s)) in [(cu, mu), (cv, mv)].into_iter().enumerate() {
-                l.c[j] = [min(l.c[j][0], c), max(l.c[j][1], c)];
-                l.m[j] = [min(l.m[j][0], s), max(l.m[j][1], s)];
-                l.c_mag = max(l.c_mag, c.abs());
-                l.m_mag = max(l.m_mag, s.abs());
+                l.c[j] = [l.c[j][0].min(c), l.c[j][1].max(c)];
+                l.m[j] = [l.m[j][0].min(s), l.m[j][1].max(s)];
+                l.c_mag = l.c_mag.max(c.abs());
+                l.m_mag = l.m_mag.max(s.abs());
             }
-            l.pad = max(l.pad, m.pad);
-            l.o_mag = max(l.o_mag, o);
+            l.pad = l.pad.max(m.pad);
+            l.o_mag = l.o_mag.max(o);
         }
         lines
     }
@@ -198,7 +198,7 @@ impl<T: Real> Lines<T> {
     /// intercepts and this evaluation.
     fn hull(&self, x_lo: T, x_hi: T) -> [T; 4] {
         let (x0, x1) = (x_lo - self.pad, x_hi + self.pad);
-        let x_mag = max(x0.abs(), x1.abs());
+        let x_mag = x0.abs().max(x1.abs());
         let err = self.pad
             + T::gamma(16)
                 * (self.o_mag + self.c_mag + self.m_mag * (x_mag + self.o_mag + self.o_mag));
@@ -206,8 +206,8 @@ impl<T: Real> Lines<T> {
         for j in 0..2 {
             let [m0, m1] = self.m[j];
             let ends = [m0 * x0, m0 * x1, m1 * x0, m1 * x1];
-            let lo = ends.iter().fold(T::INFINITY, |a, &b| min(a, b));
-            let hi = ends.iter().fold(T::NEG_INFINITY, |a, &b| max(a, b));
+            let lo = ends.iter().fold(T::INFINITY, |a, &b| a.min(b));
+            let hi = ends.iter().fold(T::NEG_INFINITY, |a, &b| a.max(b));
             out[2 * j] = (self.c[j][0] + lo) - err;
             out[2 * j + 1] = (self.c[j][1] + hi) + err;
         }
@@ -233,27 +233,35 @@ fn coherent<T: Real>(members: &[Member<T>], geom: &GridGeometry<T>, [k, u, v]: [
             let t = (x - r.origin[k]) * m.tr.prepared.inv_dir[k];
             for (j, &a) in [u, v].iter().enumerate() {
                 let p = r.origin[a] + r.direction[a] * t;
-                span[j] = [min(span[j][0], p), max(span[j][1], p)];
+                span[j] = [span[j][0].min(p), span[j][1].max(p)];
             }
         }
         (0..2).all(|j| span[j][1] - span[j][0] <= limits[j])
     })
 }
 
-#[inline]
-fn min<T: Real>(a: T, b: T) -> T {
-    if b < a { b } else { a }
-}
-
-#[inline]
-fn max<T: Real>(a: T, b: T) -> T {
-    if b > a { b } else { a }
-}
-
 /// One ray's answer: its nearest hit, or whether it hits anything.
 pub(crate) enum Answer<T> {
     Nearest(Option<Hit<T>>),
     Any(bool),
+}
+
+impl<T> Answer<T> {
+    /// The nearest hit of a nearest-hit query's answer.
+    pub(crate) fn into_hit(self) -> Option<Hit<T>> {
+        match self {
+            Self::Nearest(h) => h,
+            Self::Any(_) => unreachable!("a nearest-hit query answers with its hit"),
+        }
+    }
+
+    /// Whether the ray hits anything.
+    pub(crate) fn hits(self) -> bool {
+        match self {
+            Self::Nearest(h) => h.is_some(),
+            Self::Any(b) => b,
+        }
+    }
 }
 
 impl<T: Real> GridPart<T> {
@@ -313,14 +321,7 @@ impl<T: Real> GridPart<T> {
                 && m.tr.prepared.inv_dir[k].is_finite()
                 && along + along >= d.abs().max_component();
             if !suits {
-                answer(
-                    m.slot,
-                    Ok(if ANY {
-                        Answer::Any(self.any(prims, &m.tr, &mut ()))
-                    } else {
-                        Answer::Nearest(self.nearest(prims, &m.tr, None, &mut ()))
-                    }),
-                );
+                answer(m.slot, Ok(self.single::<ANY, P>(prims, &m.tr)));
             }
             suits
         });
@@ -330,14 +331,7 @@ impl<T: Real> GridPart<T> {
         if !self.walk_slices::<ANY, P>(prims, &mut members, k, up) {
             // Too divergent to walk together: one at a time.
             for m in members {
-                answer(
-                    m.slot,
-                    Ok(if ANY {
-                        Answer::Any(self.any(prims, &m.tr, &mut ()))
-                    } else {
-                        Answer::Nearest(self.nearest(prims, &m.tr, None, &mut ()))
-                    }),
-                );
+                answer(m.slot, Ok(self.single::<ANY, P>(prims, &m.tr)));
             }
             return;
         }
@@ -350,6 +344,19 @@ impl<T: Real> GridPart<T> {
                     Answer::Nearest(m.best)
                 }),
             );
+        }
+    }
+
+    /// One ray's answer by the single walk.
+    fn single<const ANY: bool, P: PrimitiveSet<T> + ?Sized>(
+        &self,
+        prims: &P,
+        tr: &TraversalRay<T>,
+    ) -> Answer<T> {
+        if ANY {
+            Answer::Any(self.any(prims, tr, &mut ()))
+        } else {
+            Answer::Nearest(self.nearest(prims, tr, None, &mut ()))
         }
     }
 
@@ -367,6 +374,12 @@ impl<T: Real> GridPart<T> {
         let geom = &self.geometry;
         let n = geom.resolution()[k];
         let xs = geom.boundaries(k);
+        if members.len() < MIN_PACKET || !coherent(members, geom, axes) {
+            return false;
+        }
+        let Some(mut lines) = Lines::of(members, axes) else {
+            return true;
+        };
         // The slices the members' beams reach, in the order they go.
         let (mut first, mut last) = (u32::MAX, 0u32);
         for m in members.iter() {
@@ -381,12 +394,6 @@ impl<T: Real> GridPart<T> {
             Some(b) => (b.shift(), Some(b)),
             None => (0, None),
         };
-        let Some(mut lines) = Lines::of(members, axes) else {
-            return true;
-        };
-        if members.len() < MIN_PACKET || !coherent(members, geom, axes) {
-            return false;
-        }
         let mut active = members.iter().filter(|m| !m.done).count();
         let mut rects: Vec<Option<[T; 4]>> = vec![None; members.len()];
         let mut cells: Vec<Cell<'_, T>> = Vec::new();

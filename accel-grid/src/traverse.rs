@@ -222,10 +222,32 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
         }))
     }
 
-    /// Whether bundles go by packets ([`crate::bundle`]): a grid of one
-    /// part with empty-space blocks.
-    fn packets_pay(&self) -> bool {
-        !self.empty && self.rest.is_empty() && self.first.blocks.is_some()
+    /// Answers a bundle, `answer(i, …)` for each ray `rays[i]`: its nearest
+    /// hit, or (if `ANY`) whether it hits anything. By packets
+    /// ([`crate::bundle`]) on a grid of one part with empty-space blocks,
+    /// else one ray at a time.
+    fn by_packets<const ANY: bool>(
+        &self,
+        rays: &[Ray<T>],
+        mut answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
+    ) {
+        if self.empty || !self.rest.is_empty() || self.first.blocks.is_none() {
+            for (i, ray) in rays.iter().enumerate() {
+                answer(
+                    i,
+                    if ANY {
+                        self.any(ray, &mut ()).map(Answer::Any)
+                    } else {
+                        self.nearest(ray, &mut ()).map(Answer::Nearest)
+                    },
+                );
+            }
+            return;
+        }
+        for (c, chunk) in rays.chunks(PACKET).enumerate() {
+            self.first
+                .packet::<ANY, P>(self.primitives(), chunk, |i, a| answer(c * PACKET + i, a));
+        }
     }
 
     /// Whether anything is hit, part by part.
@@ -271,42 +293,14 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     /// slice), answers one ray at a time.
     fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        if !self.packets_pay() {
-            for (ray, answer) in rays.iter().zip(out) {
-                *answer = self.nearest(ray, &mut ());
-            }
-            return;
-        }
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            self.first
-                .packet::<false, P>(self.primitives(), rays, |i, a| {
-                    out[i] = a.map(|a| match a {
-                        Answer::Nearest(h) => h,
-                        Answer::Any(_) => unreachable!("a nearest-hit packet answers hits"),
-                    });
-                });
-        }
+        self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));
     }
 
     /// As [`Accelerator::intersect_bundle`], stopping each ray at its first
     /// hit.
     fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        if !self.packets_pay() {
-            for (ray, answer) in rays.iter().zip(out) {
-                *answer = self.any(ray, &mut ());
-            }
-            return;
-        }
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-            self.first
-                .packet::<true, P>(self.primitives(), rays, |i, a| {
-                    out[i] = a.map(|a| match a {
-                        Answer::Any(b) => b,
-                        Answer::Nearest(h) => h.is_some(),
-                    });
-                });
-        }
+        self.by_packets::<true>(rays, |i, a| out[i] = a.map(Answer::hits));
     }
 
     /// Gathers the references of every cell near the region (grown by a
