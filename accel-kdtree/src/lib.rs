@@ -58,6 +58,13 @@
 //! once the best hit lies before its entry by more than the hit tolerance.
 //! Every query answers bit for bit as [`accel_core::BruteForce`].
 //!
+//! **Bundles.** The bundle queries walk rays of one direction octant as
+//! packets of eight (Wald, Slusallek, Benthin & Wagner, "Interactive
+//! rendering with coherent ray tracing", Eurographics 2001): one node fetch
+//! for the packet, each ray's plane band computed in SSE2 lanes with the
+//! single walk's own arithmetic, and each ray entering only the nodes its
+//! single walk enters, so every answer is the single query's, bit for bit.
+//!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};
 //! use accel_kdtree::{KdTree, KdTreeParams};
@@ -81,6 +88,7 @@
 //! crate docs, "Embedding"; `accel-kdtree/examples/embedded.rs`).
 
 mod build;
+mod bundle;
 mod naive;
 mod node;
 mod params;

@@ -28,10 +28,10 @@ use accel_core::{
 use core::borrow::Borrow;
 
 /// Traversal stack entries: at most one per level.
-const STACK: usize = crate::KdTreeParams::MAX_DEPTH as usize;
+pub(crate) const STACK: usize = crate::KdTreeParams::MAX_DEPTH as usize;
 
 /// What a walk does at leaves, and how far it still needs to go.
-trait Visitor<T> {
+pub(crate) trait Visitor<T> {
     /// Nodes entered after this parameter are skipped.
     fn cutoff(&self) -> T;
     /// Tests a leaf's primitives (starting at `start` of the reference
@@ -40,12 +40,12 @@ trait Visitor<T> {
 }
 
 /// The nearest hit.
-struct Nearest<'q, T: Real, P: ?Sized> {
-    prims: &'q P,
-    packed: Option<&'q PackedTriangles<T>>,
-    tr: &'q TraversalRay<T>,
-    mailbox: Mailbox,
-    best: Option<Hit<T>>,
+pub(crate) struct Nearest<'q, T: Real, P: ?Sized> {
+    pub(crate) prims: &'q P,
+    pub(crate) packed: Option<&'q PackedTriangles<T>>,
+    pub(crate) tr: &'q TraversalRay<T>,
+    pub(crate) mailbox: Mailbox,
+    pub(crate) best: Option<Hit<T>>,
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
@@ -72,12 +72,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for Nearest<'_, T, P> {
 }
 
 /// Any hit.
-struct AnyHit<'q, T: Real, P: ?Sized> {
-    prims: &'q P,
-    packed: Option<&'q PackedTriangles<T>>,
-    tr: &'q TraversalRay<T>,
-    mailbox: Mailbox,
-    found: bool,
+pub(crate) struct AnyHit<'q, T: Real, P: ?Sized> {
+    pub(crate) prims: &'q P,
+    pub(crate) packed: Option<&'q PackedTriangles<T>>,
+    pub(crate) tr: &'q TraversalRay<T>,
+    pub(crate) mailbox: Mailbox,
+    pub(crate) found: bool,
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
@@ -105,7 +105,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized> Visitor<T> for AnyHit<'_, T, P> {
 
 /// The rounding allowance, in units of `gamma(1)`, of [`band`]'s centre and
 /// of its half-width factor.
-const BAND_ROUNDINGS: u32 = 8;
+pub(crate) const BAND_ROUNDINGS: u32 = 8;
 
 /// [`TraversalRay::plane_band`] by the reciprocal direction instead of two
 /// divisions, for a beam of half-width `delta` (the node's, from
@@ -152,7 +152,7 @@ fn band<T: Real>(
 /// [`band`] for a finite reciprocal `inv` of the direction component, with
 /// `half_inv = |inv|·(1 + gamma(BAND_ROUNDINGS))`.
 #[inline(always)]
-fn finite_band<T: Real>(delta: T, inv: T, half_inv: T, s: T, o: T) -> (T, T) {
+pub(crate) fn finite_band<T: Real>(delta: T, inv: T, half_inv: T, s: T, o: T) -> (T, T) {
     let tc = (s - o) * inv;
     let half = tc.abs() * T::gamma(BAND_ROUNDINGS) + delta * half_inv;
     (tc - half, tc + half)
@@ -294,7 +294,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     /// their own rounding, relative to the parameters), `gamma(64)` of `T`
     /// otherwise.
     #[inline]
-    fn traversal_ray(&self, ray: &Ray<T>, bounds: &Aabb<T>) -> Option<TraversalRay<T>> {
+    pub(crate) fn traversal_ray(&self, ray: &Ray<T>, bounds: &Aabb<T>) -> Option<TraversalRay<T>> {
         if self.primitives().wide_hits() {
             TraversalRay::with_wide_hits(ray, bounds)
         } else {
@@ -305,7 +305,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     /// The nearest hit: each part walked in turn, with the best hit so far
     /// (each with the beam of its own bounds). A tree of one part, nearly
     /// every tree, takes a path of its own, without the loop.
-    fn nearest<C: CostCounter>(
+    pub(crate) fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
@@ -346,7 +346,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
 
     /// Any hit, part by part (a one-part tree without the loop, as
     /// [`KdTree::nearest`]).
-    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+    pub(crate) fn any<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<bool, QueryError> {
         ray.validate()?;
         if self.parts.len() == 1 {
             return Ok(self.any_in(&self.first, ray, counter));
@@ -383,6 +387,17 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     }
 
     accel_core::ray_queries_from_walks!();
+
+    /// Packets of rays of one direction octant walked together
+    /// ([`crate::bundle`]), other rays one at a time.
+    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
+        self.nearest_bundle(rays, out);
+    }
+
+    /// As [`Accelerator::intersect_bundle`].
+    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        self.any_bundle(rays, out);
+    }
 
     /// Gathers the references of every leaf near the region, then keeps
     /// those the primitive's own overlap test accepts.

@@ -102,11 +102,50 @@ impl Camera {
     }
 }
 
+/// `items` of an image `width` wide, row by row, reordered tile by tile
+/// (`tile` × `tile` pixels, row by row within a tile; the tiles of the
+/// last rows and columns cut short).
+#[must_use]
+pub fn by_tiles<T: Copy>(items: &[T], width: usize, tile: usize) -> Vec<T> {
+    let width = width.max(1);
+    let height = items.len().div_ceil(width);
+    let mut out = Vec::with_capacity(items.len());
+    for ty in (0..height).step_by(tile) {
+        for tx in (0..width).step_by(tile) {
+            for y in ty..(ty + tile).min(height) {
+                for x in tx..(tx + tile).min(width) {
+                    if let Some(&item) = items.get(y * width + x) {
+                        out.push(item);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::uv_sphere;
     use accel_core::{Accelerator, BruteForce};
+
+    #[test]
+    fn tiles_cover_the_image_once_in_tile_order() {
+        let pixels: Vec<u32> = (0..30).collect();
+        let tiled = by_tiles(&pixels, 10, 4);
+        // Three rows: tiles of 4 × 3, 4 × 3 and the last 2 × 3.
+        let want: Vec<u32> = [0, 1, 2, 3, 10, 11, 12, 13, 20, 21, 22, 23]
+            .into_iter()
+            .chain([4, 5, 6, 7, 14, 15, 16, 17, 24, 25, 26, 27])
+            .chain([8, 9, 18, 19, 28, 29])
+            .collect();
+        assert_eq!(tiled, want);
+        // A ragged last row is kept, once.
+        let mut ragged = by_tiles(&pixels[..27], 10, 8);
+        ragged.sort_unstable();
+        assert_eq!(ragged, pixels[..27]);
+    }
 
     #[test]
     fn camera_center_ray_hits_the_framed_sphere() {

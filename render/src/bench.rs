@@ -89,27 +89,7 @@ pub struct RaySet<T> {
 /// The side of the tiles the bundle passes trace an image's rays by.
 pub const TILE: usize = 8;
 
-/// `items` of an image `width` wide, row by row, reordered tile by tile
-/// (`tile` × `tile` pixels, row by row within a tile; the tiles of the
-/// last rows and columns cut short).
-#[must_use]
-pub fn by_tiles<T: Copy>(items: &[T], width: usize, tile: usize) -> Vec<T> {
-    let width = width.max(1);
-    let height = items.len().div_ceil(width);
-    let mut out = Vec::with_capacity(items.len());
-    for ty in (0..height).step_by(tile) {
-        for tx in (0..width).step_by(tile) {
-            for y in ty..(ty + tile).min(height) {
-                for x in tx..(tx + tile).min(width) {
-                    if let Some(&item) = items.get(y * width + x) {
-                        out.push(item);
-                    }
-                }
-            }
-        }
-    }
-    out
-}
+pub use accel_scenes::camera::by_tiles;
 
 /// The structure that makes generated rays ([`generate_rays`]): any gives
 /// the same hits, so the same rays, and the kD-tree is slow on no scene
@@ -750,23 +730,6 @@ pub fn table_rows(r: &AccelResult) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::scene::default_scene;
-
-    #[test]
-    fn tiles_cover_the_image_once_in_tile_order() {
-        let pixels: Vec<u32> = (0..30).collect();
-        let tiled = by_tiles(&pixels, 10, 4);
-        // Three rows: tiles of 4 × 3, 4 × 3 and the last 2 × 3.
-        let want: Vec<u32> = [0, 1, 2, 3, 10, 11, 12, 13, 20, 21, 22, 23]
-            .into_iter()
-            .chain([4, 5, 6, 7, 14, 15, 16, 17, 24, 25, 26, 27])
-            .chain([8, 9, 18, 19, 28, 29])
-            .collect();
-        assert_eq!(tiled, want);
-        // A ragged last row is kept, once.
-        let mut ragged = by_tiles(&pixels[..27], 10, 8);
-        ragged.sort_unstable();
-        assert_eq!(ragged, pixels[..27]);
-    }
 
     #[test]
     fn ray_sets_follow_the_primary_hits() {

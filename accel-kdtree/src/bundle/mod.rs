@@ -1,0 +1,392 @@
+//! Bundles: rays of one direction octant walked down the tree together, as
+//! packets (Wald, Slusallek, Benthin & Wagner, "Interactive rendering with
+//! coherent ray tracing", Eurographics 2001).
+//!
+//! A packet holds up to [`PACKET`] rays whose direction components all have
+//! the same signs, none zero. The tree is walked once for the packet: a node
+//! is fetched once, each ray computes its own plane band as the single walk
+//! does ([`crate::traverse`]), and the packet goes to the near child if any
+//! of its rays does, to the far child if any does (the far child waiting on
+//! the stack with each ray's own interval). A ray takes part in a node only
+//! where its own interval and cutoff let its single walk enter it, and leaves
+//! are tested for those rays alone.
+//!
+//! **Exact per ray.** Since every ray of a packet shares the near side of
+//! every plane, the packet's order of nodes is the single walk's order for
+//! each of its rays. Restricted to the nodes a ray takes part in, it is that
+//! ray's single walk: the same intervals, from the same arithmetic, the same
+//! leaves tested in the same order with the same mailbox, hence the same
+//! cutoffs and the same answer, bit for bit. Rays with a zero (or subnormal)
+//! direction component, invalid rays, and rays left alone in their octant go
+//! one at a time.
+
+use crate::build::decode_split;
+use crate::reach::node_beam;
+use crate::traverse::{AnyHit, BAND_ROUNDINGS, Nearest, STACK, Visitor};
+use crate::tree::KdTree;
+use accel_core::{Hit, Mailbox, PreparedRay, PrimitiveSet, QueryError, Ray, Real, TraversalRay};
+use core::borrow::Borrow;
+use lanes::{LaneRays, Lanes, PACKET, at_or_before, cross};
+
+mod lanes;
+
+/// The lanes of a packet of `n` rays.
+fn first_lanes(n: usize) -> Lanes {
+    (1 << n) - 1
+}
+
+/// The packet a valid ray may join: the signs of its direction's components
+/// (bit `a` set for a positive component `a`), or `None` when a reciprocal
+/// is not finite, so the ray goes alone (the single walk's checked path).
+fn octant<T: Real>(ray: &Ray<T>) -> Option<u8> {
+    let inv = PreparedRay::reciprocal(ray.direction);
+    let mut key = 0;
+    for a in 0..3 {
+        if !inv[a].is_finite() {
+            return None;
+        }
+        key |= u8::from(ray.direction[a] > T::ZERO) << a;
+    }
+    Some(key)
+}
+
+/// The rays gathered for the next packet.
+struct Gathered {
+    /// Indices of the rays in the bundle.
+    index: [usize; PACKET],
+    /// Rays gathered.
+    len: usize,
+    /// Their octant.
+    key: u8,
+}
+
+/// How [`by_octant`] hands out a bundle's rays.
+enum Group<'g> {
+    /// The indices of a packet of two or more rays of one octant.
+    Packet(&'g [usize]),
+    /// The index of a ray that goes alone (invalid rays included, so that
+    /// they answer the single query's error).
+    Single(usize),
+}
+
+/// Splits `rays` into packets of one octant, in order, and the rays that go
+/// alone, for `visit`.
+fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
+    let mut g = Gathered {
+        index: [0; PACKET],
+        len: 0,
+        key: 0,
+    };
+    let flush = |g: &mut Gathered, visit: &mut dyn FnMut(Group<'_>)| {
+        match g.len {
+            0 => {}
+            1 => visit(Group::Single(g.index[0])),
+            n => visit(Group::Packet(&g.index[..n])),
+        }
+        g.len = 0;
+    };
+    for (i, ray) in rays.iter().enumerate() {
+        let key = if ray.validate().is_ok() {
+            octant(ray)
+        } else {
+            None
+        };
+        let Some(key) = key else {
+            visit(Group::Single(i));
+            continue;
+        };
+        if g.len > 0 && g.key != key {
+            flush(&mut g, &mut visit);
+        }
+        g.key = key;
+        g.index[g.len] = i;
+        g.len += 1;
+        if g.len == PACKET {
+            flush(&mut g, &mut visit);
+        }
+    }
+    flush(&mut g, &mut visit);
+}
+
+/// A packet's entry on the traversal stack: a node, the lanes that enter it
+/// and each lane's interval. A bundle's packets share one stack (at most
+/// [`STACK`] entries).
+type Entry<T> = (u32, Lanes, [T; PACKET], [T; PACKET]);
+
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
+    /// [`accel_core::Accelerator::intersect_bundle`]: packets of one octant,
+    /// other rays one at a time.
+    pub(crate) fn nearest_bundle(
+        &self,
+        rays: &[Ray<T>],
+        out: &mut [Result<Option<Hit<T>>, QueryError>],
+    ) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        let mut stack = Vec::with_capacity(STACK);
+        by_octant(rays, |group| match group {
+            Group::Packet(index) => {
+                let hits = self.nearest_packet(rays, index, &mut stack);
+                for (&i, hit) in index.iter().zip(hits) {
+                    out[i] = Ok(hit);
+                }
+            }
+            Group::Single(i) => out[i] = self.nearest(&rays[i], &mut ()),
+        });
+    }
+
+    /// [`accel_core::Accelerator::occluded_bundle`], as
+    /// [`KdTree::nearest_bundle`].
+    pub(crate) fn any_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        let mut stack = Vec::with_capacity(STACK);
+        by_octant(rays, |group| match group {
+            Group::Packet(index) => {
+                let found = self.any_packet(rays, index, &mut stack);
+                for (&i, found) in index.iter().zip(found) {
+                    out[i] = Ok(found);
+                }
+            }
+            Group::Single(i) => out[i] = self.any(&rays[i], &mut ()),
+        });
+    }
+
+    /// The traversal rays of the packet's rays (`index` into `rays`) through
+    /// a part with `bounds`, with the lanes whose beam meets the part. Unused
+    /// lanes repeat the first ray that has one, and are not in the set.
+    fn packet_rays(
+        &self,
+        rays: &[Ray<T>],
+        index: &[usize],
+        bounds: &accel_core::Aabb<T>,
+    ) -> Option<([TraversalRay<T>; PACKET], Lanes)> {
+        let trs: [Option<TraversalRay<T>>; PACKET] = core::array::from_fn(|l| {
+            index
+                .get(l)
+                .and_then(|&i| self.traversal_ray(&rays[i], bounds))
+        });
+        let filler = trs.iter().flatten().next().copied()?;
+        let lanes = trs
+            .iter()
+            .enumerate()
+            .fold(0, |m, (l, t)| m | (Lanes::from(t.is_some()) << l));
+        Some((trs.map(|t| t.unwrap_or(filler)), lanes))
+    }
+
+    /// The nearest hit of each ray of a packet, part by part as
+    /// [`KdTree::nearest`].
+    fn nearest_packet(
+        &self,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Option<Hit<T>>; PACKET] {
+        let mut best = [None; PACKET];
+        for part in &self.parts {
+            let Some((trs, lanes)) = self.packet_rays(rays, index, &part.bounds) else {
+                continue;
+            };
+            let mut v: [Nearest<'_, T, P>; PACKET] = core::array::from_fn(|l| Nearest {
+                prims: self.primitives(),
+                packed: self.packed.as_ref(),
+                tr: &trs[l],
+                mailbox: Mailbox::new(),
+                best: best[l],
+            });
+            self.walk_packet(part.root, &trs, lanes, &mut v, stack);
+            for (b, v) in best.iter_mut().zip(&v) {
+                *b = v.best;
+            }
+        }
+        best
+    }
+
+    /// Whether each ray of a packet hits anything, part by part as
+    /// [`KdTree::any`].
+    fn any_packet(
+        &self,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [bool; PACKET] {
+        let mut found = [false; PACKET];
+        let mut open = first_lanes(index.len());
+        for part in &self.parts {
+            let Some((trs, lanes)) = self.packet_rays(rays, index, &part.bounds) else {
+                continue;
+            };
+            let mut v: [AnyHit<'_, T, P>; PACKET] = core::array::from_fn(|l| AnyHit {
+                prims: self.primitives(),
+                packed: self.packed.as_ref(),
+                tr: &trs[l],
+                mailbox: Mailbox::new(),
+                found: false,
+            });
+            self.walk_packet(part.root, &trs, lanes & open, &mut v, stack);
+            for (l, v) in v.iter().enumerate() {
+                if v.found {
+                    found[l] = true;
+                    open &= !(1 << l);
+                }
+            }
+            if open == 0 {
+                break;
+            }
+        }
+        found
+    }
+
+    /// Walks a packet, narrowing each ray's beam per node where the tree
+    /// says it pays (as [`KdTree::walk`]).
+    fn walk_packet<V: Visitor<T>>(
+        &self,
+        root: usize,
+        trs: &[TraversalRay<T>; PACKET],
+        lanes: Lanes,
+        v: &mut [V; PACKET],
+        stack: &mut Vec<Entry<T>>,
+    ) {
+        if self.reach.is_empty() {
+            self.walk_packet_with::<false, V>(root, trs, lanes, v, stack);
+        } else {
+            self.walk_packet_with::<true, V>(root, trs, lanes, v, stack);
+        }
+    }
+
+    /// The packet walk: the single walk's `FINITE` path
+    /// (`KdTree::walk_with`), lane by lane, with the lanes that enter each
+    /// node as a bit set.
+    #[inline]
+    fn walk_packet_with<const NARROW: bool, V: Visitor<T>>(
+        &self,
+        root: usize,
+        trs: &[TraversalRay<T>; PACKET],
+        lanes: Lanes,
+        v: &mut [V; PACKET],
+        stack: &mut Vec<Entry<T>>,
+    ) {
+        let per_lane = |f: &dyn Fn(&TraversalRay<T>) -> T| -> [T; PACKET] {
+            core::array::from_fn(|l| f(&trs[l]))
+        };
+        // Per-axis values indexed by `axis & 3`, as in the single walk (the
+        // fourth row is never read).
+        let axes = |f: &dyn Fn(&TraversalRay<T>, usize) -> T| -> [[T; PACKET]; 4] {
+            core::array::from_fn(|a| per_lane(&|t| if a < 3 { f(t, a) } else { T::ZERO }))
+        };
+        let rays = LaneRays {
+            o: axes(&|t, a| t.ray().origin[a]),
+            inv: axes(&|t, a| t.prepared.inv_dir[a]),
+            half_inv: axes(&|t, a| {
+                t.prepared.inv_dir[a].abs() * (T::ONE + T::gamma(BAND_ROUNDINGS))
+            }),
+        };
+        let delta = per_lane(&|t| t.delta);
+        let max_d = per_lane(&|t| t.ray().direction.abs().max_component());
+        // One octant: the first lane's signs are every lane's.
+        let positive: [bool; 4] =
+            core::array::from_fn(|a| a < 3 && trs[0].ray().direction[a] > T::ZERO);
+        let mut cutoff: [T; PACKET] = core::array::from_fn(|l| v[l].cutoff());
+        // Lanes whose walk has ended (an any-hit query that found one).
+        let mut ended: Lanes = 0;
+        stack.clear();
+        let (mut idx, mut mask) = (root, lanes);
+        let mut t0 = per_lane(&|t| t.t_start);
+        let mut t1 = per_lane(&|t| t.t_end);
+        loop {
+            let live = at_or_before(&t0, &cutoff) & mask & !ended;
+            if live != 0 {
+                let node = &self.nodes[idx];
+                if !node.is_leaf() {
+                    let axis = node.axis() & 3;
+                    let s = decode_split(node.split_word(), &self.splits);
+                    let below = if node.has_below() { idx + 1 } else { 0 };
+                    let above = node.above_child() as usize;
+                    let (near, far) = if positive[axis] {
+                        (below, above)
+                    } else {
+                        (above, below)
+                    };
+                    let narrowed;
+                    let delta = if NARROW {
+                        narrowed = core::array::from_fn(|l| {
+                            node_beam(self.reach[idx], t0[l], t1[l], max_d[l], delta[l])
+                        });
+                        &narrowed
+                    } else {
+                        &delta
+                    };
+                    let c = cross(&rays, axis, delta, s, &t0, &t1);
+                    let (near_t1, far_t0) = (c.near_t1, c.far_t0);
+                    let (mut to_near, mut to_far) = (c.to_near, c.to_far);
+                    to_near &= if near != 0 { live } else { 0 };
+                    to_far &= if far != 0 { live } else { 0 };
+                    if to_near != 0 {
+                        if to_far != 0 {
+                            stack.push((far as u32, to_far, far_t0, t1));
+                        }
+                        (idx, mask, t1) = (near, to_near, near_t1);
+                        continue;
+                    }
+                    if to_far != 0 {
+                        (idx, mask, t0) = (far, to_far, far_t0);
+                        continue;
+                    }
+                } else {
+                    let (start, prims) = self.leaf_list(node);
+                    let mut rest = live;
+                    while rest != 0 {
+                        let l = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        if v[l].leaf(start, prims, &mut ()) {
+                            ended |= 1 << l;
+                        } else {
+                            cutoff[l] = v[l].cutoff();
+                        }
+                    }
+                    if lanes & !ended == 0 {
+                        return;
+                    }
+                }
+            }
+            let Some((i, m, a, b)) = stack.pop() else {
+                return;
+            };
+            (idx, mask, t0, t1) = (i as usize, m, a, b);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use accel_core::Vec3;
+
+    fn ray(d: Vec3<f64>) -> Ray<f64> {
+        Ray::new(Vec3::new(0.0, 0.0, 0.0), d).expect("a valid ray")
+    }
+
+    #[test]
+    fn packets_hold_one_octant_in_order_and_zero_components_go_alone() {
+        let plus = ray(Vec3::new(1.0, 2.0, 3.0));
+        let minus_x = ray(Vec3::new(-1.0, 2.0, 3.0));
+        let zero_y = ray(Vec3::new(1.0, 0.0, 3.0));
+        let mut rays = vec![plus; 3];
+        rays.push(minus_x);
+        rays.push(zero_y);
+        rays.extend([minus_x; 10]);
+        rays.push(plus);
+        let (mut packets, mut singles) = (Vec::new(), Vec::new());
+        by_octant(&rays, |g| match g {
+            Group::Packet(p) => packets.push(p.to_vec()),
+            Group::Single(i) => singles.push(i),
+        });
+        assert_eq!(
+            packets,
+            vec![
+                vec![0, 1, 2],
+                (3..4).chain(5..12).collect(),
+                (12..15).collect()
+            ]
+        );
+        assert_eq!(singles, vec![4, 15]);
+    }
+}
