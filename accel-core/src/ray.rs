@@ -129,6 +129,20 @@ impl<T: Real> Ray<T> {
         !(self.t_min <= self.t_max)
     }
 
+    /// Whether the directions of `self` and `other` lie within the angle
+    /// whose cosine is `cos` (an angle below 90°: directions 90° or more
+    /// apart never do): the test that groups rays into packets of a
+    /// bundle query. Computed in `f64`; for a direction whose squared length
+    /// overflows or vanishes there the answer may be wrong, so it may decide
+    /// speed, never an answer.
+    #[inline]
+    #[must_use]
+    pub fn heads_within(&self, other: &Ray<T>, cos: f64) -> bool {
+        let (a, b) = (self.direction.cast::<f64>(), other.direction.cast::<f64>());
+        let dot = a.dot(b);
+        dot > 0.0 && dot * dot >= cos * cos * a.dot(a) * b.dot(b)
+    }
+
     /// The point at parameter `t`.
     #[inline]
     #[must_use]
@@ -215,6 +229,21 @@ impl<T: Real> PreparedRay<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn heading_compares_angles_not_lengths() {
+        let o = Vec3::new(1.0f32, 2.0, 3.0);
+        let ray = |d: Vec3<f32>| Ray::new(o, d).unwrap();
+        let x = ray(Vec3::new(1.0, 0.0, 0.0));
+        // 20° and 30° from x, of other lengths: cos 20° > 0.9 > cos 30°.
+        let (c20, s20) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
+        let (c30, s30) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+        assert!(x.heads_within(&ray(Vec3::new(c20, s20, 0.0) * 1e30), 0.9));
+        assert!(!x.heads_within(&ray(Vec3::new(c30, 0.0, s30) * 1e-30), 0.9));
+        assert!(x.heads_within(&x, 1.0));
+        // Directions 90° or more apart never are.
+        assert!(!x.heads_within(&ray(Vec3::new(-1.0, 0.0, 0.0)), -1.0));
+    }
 
     #[test]
     fn bad_rays_get_typed_errors() {

@@ -38,6 +38,13 @@ pub const PACKET: usize = 64;
 /// fixed costs need company to pay.
 pub const MIN_PACKET: usize = 16;
 
+/// The cosine of the widest angle between a bundle's first ray and the
+/// others that still lets the bundle be walked by packets: unless
+/// [`MIN_PACKET`] of its rays head within about 26° of the first, every ray
+/// takes the single walk at once (diffuse rays in bundles ran 2–9% slower
+/// than single rays when each packet was set up before being given up).
+pub const HEADING_COS: f64 = 0.9;
+
 /// How far apart (in cells) a packet's beams may spread across the grid
 /// and still be walked together ([`Lines::coherent`]).
 pub const COHERENT_CELLS: f64 = 8.0;

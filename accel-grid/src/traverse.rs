@@ -1,6 +1,6 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
-use crate::bundle::{Answer, PACKET};
+use crate::bundle::{Answer, HEADING_COS, MIN_PACKET, PACKET};
 use crate::dda::{BeamWalk, Step};
 use crate::grid::{Grid, GridPart};
 use accel_core::packed::for_each_candidate;
@@ -231,20 +231,32 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
         rays: &[Ray<T>],
         mut answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
     ) {
+        let single = |ray: &Ray<T>| {
+            if ANY {
+                self.any(ray, &mut ()).map(Answer::Any)
+            } else {
+                self.nearest(ray, &mut ()).map(Answer::Nearest)
+            }
+        };
         if self.empty || !self.rest.is_empty() || self.first.blocks.is_none() {
             for (i, ray) in rays.iter().enumerate() {
-                answer(
-                    i,
-                    if ANY {
-                        self.any(ray, &mut ()).map(Answer::Any)
-                    } else {
-                        self.nearest(ray, &mut ()).map(Answer::Nearest)
-                    },
-                );
+                answer(i, single(ray));
             }
             return;
         }
         for (c, chunk) in rays.chunks(PACKET).enumerate() {
+            // Rays heading every way (diffuse bounces) cannot make a packet:
+            // one at a time, without the packet's set-up.
+            let heading = chunk
+                .iter()
+                .filter(|r| chunk[0].heads_within(r, HEADING_COS))
+                .count();
+            if heading < MIN_PACKET {
+                for (i, ray) in chunk.iter().enumerate() {
+                    answer(c * PACKET + i, single(ray));
+                }
+                continue;
+            }
             self.first
                 .packet::<ANY, P>(self.primitives(), chunk, |i, a| answer(c * PACKET + i, a));
         }

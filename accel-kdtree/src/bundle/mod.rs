@@ -2,8 +2,10 @@
 //! packets (Wald, Slusallek, Benthin & Wagner, "Interactive rendering with
 //! coherent ray tracing", Eurographics 2001).
 //!
-//! A packet holds up to [`PACKET`] rays whose direction components all have
-//! the same signs, none zero. The tree is walked once for the packet: a node
+//! A packet holds [`MIN_PACKET`] to [`PACKET`] consecutive rays of the
+//! bundle whose direction components all have the same signs, none zero,
+//! and whose directions lie within about 26° of the first one's
+//! ([`COHERENT_COS`]); other rays go alone. The tree is walked once for the packet: a node
 //! is fetched once, each ray computes its own plane band as the single walk
 //! does ([`crate::traverse`]), and the packet goes to the near child if any
 //! of its rays does, to the far child if any does (the far child waiting on
@@ -16,9 +18,8 @@
 //! each of its rays. Restricted to the nodes a ray takes part in, it is that
 //! ray's single walk: the same intervals, from the same arithmetic, the same
 //! leaves tested in the same order with the same mailbox, hence the same
-//! cutoffs and the same answer, bit for bit. Rays with a zero (or subnormal)
-//! direction component, invalid rays, and rays left alone in their octant go
-//! one at a time.
+//! cutoffs and the same answer, bit for bit. Which rays share a packet
+//! decides only speed.
 
 use crate::build::decode_split;
 use crate::reach::node_beam;
@@ -61,17 +62,6 @@ const MIN_PACKET: usize = 4;
 /// fast as single rays), so such rays go alone.
 const COHERENT_COS: f64 = 0.9;
 
-/// Whether directions `a` and `b` are within the angle of
-/// [`COHERENT_COS`], computed in `f64` (for a direction so long or so short
-/// that its square overflows or vanishes there the answer may be wrong, which
-/// costs speed, never exactness).
-fn within_cone(a: &[f64; 3], b: &[f64; 3]) -> bool {
-    let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let norms =
-        (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    dot > 0.0 && dot * dot >= COHERENT_COS * COHERENT_COS * norms
-}
-
 /// The rays gathered for the next packet.
 struct Gathered {
     /// Indices of the rays in the bundle.
@@ -80,8 +70,6 @@ struct Gathered {
     len: usize,
     /// Their octant.
     key: u8,
-    /// The first ray's direction.
-    direction: [f64; 3],
 }
 
 /// How [`by_octant`] hands out a bundle's rays.
@@ -102,20 +90,17 @@ fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
         index: [0; PACKET],
         len: 0,
         key: 0,
-        direction: [0.0; 3],
     };
     for (i, ray) in rays.iter().enumerate() {
         let Some(key) = octant(ray) else {
             visit(Group::Single(i));
             continue;
         };
-        let d = ray.direction;
-        let direction = [d.x.to_f64(), d.y.to_f64(), d.z.to_f64()];
-        if g.len > 0 && (g.key != key || !within_cone(&g.direction, &direction)) {
+        if g.len > 0 && (g.key != key || !rays[g.index[0]].heads_within(ray, COHERENT_COS)) {
             flush(rays, &mut g, &mut visit);
         }
         if g.len == 0 {
-            (g.key, g.direction) = (key, direction);
+            g.key = key;
         }
         g.index[g.len] = i;
         g.len += 1;
