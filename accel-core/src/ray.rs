@@ -143,6 +143,14 @@ impl<T: Real> Ray<T> {
         dot > 0.0 && dot * dot >= cos * cos * a.dot(a) * b.dot(b)
     }
 
+    /// How many of `rays` head within the angle of `cos` of `self`
+    /// ([`Ray::heads_within`]): a bundle query's first look at whether its
+    /// rays can make packets at all.
+    #[must_use]
+    pub fn count_heading_with(&self, rays: &[Ray<T>], cos: f64) -> usize {
+        rays.iter().filter(|r| self.heads_within(r, cos)).count()
+    }
+
     /// The point at parameter `t`.
     #[inline]
     #[must_use]
@@ -241,6 +249,8 @@ mod tests {
         assert!(x.heads_within(&ray(Vec3::new(c20, s20, 0.0) * 1e30), 0.9));
         assert!(!x.heads_within(&ray(Vec3::new(c30, 0.0, s30) * 1e-30), 0.9));
         assert!(x.heads_within(&x, 1.0));
+        let y = ray(Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(x.count_heading_with(&[x, y, x, y, y], 0.9), 2);
         // Directions 90° or more apart never are.
         assert!(!x.heads_within(&ray(Vec3::new(-1.0, 0.0, 0.0)), -1.0));
     }

@@ -247,11 +247,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
         for (c, chunk) in rays.chunks(PACKET).enumerate() {
             // Rays heading every way (diffuse bounces) cannot make a packet:
             // one at a time, without the packet's set-up.
-            let heading = chunk
-                .iter()
-                .filter(|r| chunk[0].heads_within(r, HEADING_COS))
-                .count();
-            if heading < MIN_PACKET {
+            if chunk[0].count_heading_with(chunk, HEADING_COS) < MIN_PACKET {
                 for (i, ray) in chunk.iter().enumerate() {
                     answer(c * PACKET + i, single(ray));
                 }

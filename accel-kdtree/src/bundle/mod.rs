@@ -81,34 +81,48 @@ enum Group<'g> {
     Single(usize),
 }
 
+/// Rays looked at together to decide whether a bundle can make packets.
+const LOOK_AHEAD: usize = 64;
+
 /// Splits `rays` into packets of one octant whose directions lie within the
 /// angle of [`COHERENT_COS`] of their first ray's, in order, and the rays
-/// that go alone, for `visit`. Rays are validated only when they would join
-/// a packet: the others' single queries validate them anyway.
+/// that go alone, for `visit`. Every [`LOOK_AHEAD`] rays where fewer than a
+/// quarter head with the first (diffuse bounces, random rays) go alone at
+/// once. Rays are validated only when they would join a packet: the others'
+/// single queries validate them anyway.
 fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
     let mut g = Gathered {
         index: [0; PACKET],
         len: 0,
         key: 0,
     };
-    for (i, ray) in rays.iter().enumerate() {
-        let Some(key) = octant(ray) else {
-            visit(Group::Single(i));
+    for (c, chunk) in rays.chunks(LOOK_AHEAD).enumerate() {
+        let base = c * LOOK_AHEAD;
+        if 4 * chunk[0].count_heading_with(chunk, COHERENT_COS) < chunk.len() {
+            for i in base..base + chunk.len() {
+                visit(Group::Single(i));
+            }
             continue;
-        };
-        if g.len > 0 && (g.key != key || !rays[g.index[0]].heads_within(ray, COHERENT_COS)) {
-            flush(rays, &mut g, &mut visit);
         }
-        if g.len == 0 {
-            g.key = key;
+        for (i, ray) in (base..).zip(chunk) {
+            let Some(key) = octant(ray) else {
+                visit(Group::Single(i));
+                continue;
+            };
+            if g.len > 0 && (g.key != key || !rays[g.index[0]].heads_within(ray, COHERENT_COS)) {
+                flush(rays, &mut g, &mut visit);
+            }
+            if g.len == 0 {
+                g.key = key;
+            }
+            g.index[g.len] = i;
+            g.len += 1;
+            if g.len == PACKET {
+                flush(rays, &mut g, &mut visit);
+            }
         }
-        g.index[g.len] = i;
-        g.len += 1;
-        if g.len == PACKET {
-            flush(rays, &mut g, &mut visit);
-        }
+        flush(rays, &mut g, &mut visit);
     }
-    flush(rays, &mut g, &mut visit);
 }
 
 /// Hands out the gathered rays, as a packet if [`MIN_PACKET`] or more of
