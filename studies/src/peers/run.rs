@@ -719,6 +719,10 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
 /// Whether the bundles of `set` are coherent: the neighbouring pixels of
 /// an image's tiles. A hint for tools that ask for one (Embree's
 /// `RTC_INTERSECT_CONTEXT_FLAG_COHERENT`); ours find coherence themselves.
+/// Embree with the flag on every set (sphere_100k and the bunny,
+/// 2026-12-06, two runs each): diffuse packets at 0.45–0.55× their speed
+/// without it, shadow packets at 0.9–1.2× (once 1.6× against a slow run),
+/// so only the tiles get it.
 fn coherent(set: &RaySet<f32>) -> bool {
     set.image_width.is_some()
 }
