@@ -82,7 +82,7 @@ pub struct RaySet<T> {
     pub rays: Vec<Ray<T>>,
     /// For the rays of an image, row by row: its width. The bundle passes
     /// of [`measure_set`] then trace them by tiles of [`TILE`] × [`TILE`]
-    /// pixels, as a renderer would.
+    /// pixels, as a renderer would ([`RaySet::bundle_order`]).
     pub image_width: Option<u32>,
 }
 
@@ -90,6 +90,20 @@ pub struct RaySet<T> {
 pub const TILE: usize = 8;
 
 pub use accel_scenes::camera::by_tiles;
+
+impl<T> RaySet<T> {
+    /// `items`, one per ray of this set in the set's order (the rays
+    /// themselves, their indices, their answers), in the order the bundle
+    /// passes trace the rays: an image's by [`TILE`] × [`TILE`] tiles
+    /// ([`by_tiles`]), any other set's as they are.
+    #[must_use]
+    pub fn bundle_order<'a, I: Copy>(&self, items: &'a [I]) -> std::borrow::Cow<'a, [I]> {
+        match self.image_width {
+            Some(w) => std::borrow::Cow::Owned(by_tiles(items, w as usize, TILE)),
+            None => std::borrow::Cow::Borrowed(items),
+        }
+    }
+}
 
 /// The structure that makes generated rays ([`generate_rays`]): any gives
 /// the same hits, so the same rays, and the kD-tree is slow on no scene
@@ -587,16 +601,9 @@ pub fn measure_set<T: Real>(
     })
     .map_err(query_error)?;
     check(timed_hits)?;
-    let tiled;
-    let bundled = match set.image_width {
-        Some(w) => {
-            tiled = by_tiles(&set.rays, w as usize, TILE);
-            &tiled
-        }
-        None => &set.rays,
-    };
+    let bundled = set.bundle_order(&set.rays);
     let bundles = time_passes(min_time, || {
-        timed_hits = count_bundle_hits(accel, any_hit, bundled)?;
+        timed_hits = count_bundle_hits(accel, any_hit, &bundled)?;
         Ok(())
     })
     .map_err(query_error)?;
@@ -730,6 +737,31 @@ pub fn table_rows(r: &AccelResult) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::scene::default_scene;
+
+    #[test]
+    fn only_an_image_s_rays_are_bundled_by_tiles() {
+        let ray = |x: f32| Ray {
+            origin: accel_core::Vec3::new(x, 0.0, 0.0),
+            direction: accel_core::Vec3::new(0.0, 0.0, 1.0),
+            t_min: 0.0,
+            t_max: 1.0,
+        };
+        let rays: Vec<Ray<f32>> = (0..20u8).map(|i| ray(f32::from(i))).collect();
+        let indices: Vec<usize> = (0..20).collect();
+        let mut set = RaySet {
+            kind: RayKind::Primary,
+            rays,
+            image_width: Some(10),
+        };
+        // Two rows of 10: a tile of 8 × 2, then the last 2 × 2.
+        let order = set.bundle_order(&indices);
+        assert_eq!(order[..10], [0, 1, 2, 3, 4, 5, 6, 7, 10, 11]);
+        assert_eq!(order[16..], [8, 9, 18, 19]);
+        let bundled = set.bundle_order(&set.rays);
+        assert_eq!(bundled[8].origin.x, 10.0);
+        set.image_width = None;
+        assert_eq!(*set.bundle_order(&indices), *indices);
+    }
 
     #[test]
     fn ray_sets_follow_the_primary_hits() {

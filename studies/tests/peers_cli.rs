@@ -78,6 +78,43 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
         assert_eq!(s["agreement"]["t"], 0, "{s}");
         assert!(s["mrays"].as_f64().unwrap() > 0.0, "{s}");
     }
+    // Every tool with bundle queries has a bundle figure per set, with the
+    // same answers as its single rays (ours bit for bit: the same digest);
+    // the peers without packets have none.
+    for s in sets {
+        let name = s["name"].as_str().unwrap();
+        let bundles = s["bundles"].as_array().unwrap();
+        let sizes: Vec<u64> = bundles
+            .iter()
+            .map(|b| b["rays_per_bundle"].as_u64().unwrap())
+            .collect();
+        let expected: &[u64] = match name {
+            "grid" | "octree" | "kdtree" | "kdtree-fast" => &[64],
+            "embree" | "embree-robust" => &[16, 8],
+            _ => &[],
+        };
+        assert_eq!(sizes, expected, "{s}");
+        for b in bundles {
+            assert!(b["mrays"].as_f64().unwrap() > 0.0, "{s}");
+            assert_eq!(b["agreement"]["rays"], s["agreement"]["rays"], "{s}");
+            if expected == [64] {
+                assert_eq!(b["digest"], s["digest"], "{s}");
+                assert_eq!(b["agreement"]["hit_miss"], 0, "{s}");
+            }
+        }
+    }
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("Mrays/s"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert_eq!(
+        header.split_whitespace().collect::<Vec<_>>(),
+        [
+            "Mrays/s", "bundle", "primary", "bundled", "shadow", "bundled", "diffuse", "bundled"
+        ],
+        "{text}"
+    );
+    assert!(text.contains("grid x64 "), "{text}");
     let kinds: Vec<_> = report["ray_sets"]
         .as_array()
         .unwrap()

@@ -72,12 +72,127 @@ pub struct PeerHit {
     pub prim: u32,
 }
 
-/// The two queries of the benchmark, on one thread.
+/// The two queries of the benchmark, on one thread, one ray at a time and,
+/// where the tool has them, in packets.
+///
+/// The packet queries answer exactly what the single ones would, ray for
+/// ray (up to the tool's own rounding: a tool's packet kernels may round
+/// differently from its single-ray ones). Their defaults loop the single
+/// queries; a tool with real packet queries overrides them and lists its
+/// widths in [`Tracer::packet_widths`], and only those are measured as
+/// packet figures, so that no report presents a loop as a packet figure.
 pub trait Tracer {
     /// The nearest hit with `t ∈ [ray.t_min, ray.t_max]`, if any.
     fn nearest(&self, ray: &Ray<f32>) -> Option<PeerHit>;
     /// Whether anything is hit with `t ∈ [ray.t_min, ray.t_max]`.
     fn occluded(&self, ray: &Ray<f32>) -> bool;
+
+    /// The packet widths (rays per packet) of the tool's real packet
+    /// queries, widest first; none by default.
+    fn packet_widths(&self) -> &'static [usize] {
+        &[]
+    }
+
+    /// [`Tracer::nearest`] for each ray of one packet of up to `width` rays
+    /// (`width` one of [`Tracer::packet_widths`]; a short packet has its
+    /// other lanes inactive): `out[i]` becomes the answer to `rays[i]`.
+    /// `coherent` says whether the rays are neighbours (a tile of camera
+    /// rays), a hint a tool may pass on to its traversal. By default one
+    /// ray at a time.
+    ///
+    /// # Panics
+    /// If `rays` and `out` differ in length, or (tools with packets) if
+    /// there are more rays than `width` or `width` is not one of theirs.
+    fn nearest_packet(
+        &self,
+        width: usize,
+        coherent: bool,
+        rays: &[Ray<f32>],
+        out: &mut [Option<PeerHit>],
+    ) {
+        let _ = (width, coherent);
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the packet");
+        for (ray, answer) in rays.iter().zip(out) {
+            *answer = self.nearest(ray);
+        }
+    }
+
+    /// [`Tracer::occluded`] for each ray of one packet, as
+    /// [`Tracer::nearest_packet`]. By default one ray at a time.
+    ///
+    /// # Panics
+    /// As [`Tracer::nearest_packet`].
+    fn occluded_packet(&self, width: usize, coherent: bool, rays: &[Ray<f32>], out: &mut [bool]) {
+        let _ = (width, coherent);
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the packet");
+        for (ray, answer) in rays.iter().zip(out) {
+            *answer = self.occluded(ray);
+        }
+    }
+}
+
+/// Every answer of `tracer` to `rays`, through its packet queries
+/// `width` rays at a time (the last packet short when `width` does not
+/// divide the count): nearest hits, or with `any_hit` whether each ray is
+/// blocked.
+#[must_use]
+pub fn packet_answers(
+    tracer: &dyn Tracer,
+    width: usize,
+    coherent: bool,
+    any_hit: bool,
+    rays: &[Ray<f32>],
+) -> SetAnswers {
+    let width = width.max(1);
+    if any_hit {
+        let mut out = vec![false; rays.len()];
+        for (packet, answers) in rays.chunks(width).zip(out.chunks_mut(width)) {
+            tracer.occluded_packet(width, coherent, packet, answers);
+        }
+        SetAnswers::Occluded(out)
+    } else {
+        let mut out = vec![None; rays.len()];
+        for (packet, answers) in rays.chunks(width).zip(out.chunks_mut(width)) {
+            tracer.nearest_packet(width, coherent, packet, answers);
+        }
+        SetAnswers::Nearest(out)
+    }
+}
+
+/// Hits of one pass of `tracer`'s packet queries over `rays`, `width` rays
+/// at a time, on this thread: [`packet_answers`] without keeping them.
+///
+/// # Panics
+/// If `width` is over 16, the widest packet of any peer.
+#[must_use]
+pub fn count_packet_hits(
+    tracer: &dyn Tracer,
+    width: usize,
+    coherent: bool,
+    any_hit: bool,
+    rays: &[Ray<f32>],
+) -> u64 {
+    /// Lanes of the answer buffers: the widest packet any peer has.
+    const MAX_WIDTH: usize = 16;
+    assert!(width <= MAX_WIDTH, "packets of {width} rays");
+    let width = width.max(1);
+    let mut hits = 0;
+    let mut nearest = [None; MAX_WIDTH];
+    let mut any = [false; MAX_WIDTH];
+    for packet in rays.chunks(width) {
+        let n = packet.len();
+        if any_hit {
+            tracer.occluded_packet(width, coherent, packet, &mut any[..n]);
+            hits += any[..n].iter().map(|&b| u64::from(b)).sum::<u64>();
+        } else {
+            tracer.nearest_packet(width, coherent, packet, &mut nearest[..n]);
+            hits += nearest[..n]
+                .iter()
+                .map(|h| u64::from(h.is_some()))
+                .sum::<u64>();
+        }
+    }
+    hits
 }
 
 /// A peer, built: its tracer and how long the build took.
@@ -166,6 +281,31 @@ impl SetAnswers {
         match self {
             Self::Nearest(v) => v[i].is_some(),
             Self::Occluded(v) => v[i],
+        }
+    }
+
+    /// These answers, listed in the order `order` gives the rays (answer
+    /// `j` is that of ray `order[j]` of the set: the order of the bundle
+    /// passes, [`render::bench::RaySet::bundle_order`]), put back in the
+    /// set's order.
+    ///
+    /// # Panics
+    /// If `order` is not a permutation of the answers' indices.
+    #[must_use]
+    pub fn in_set_order(&self, order: &[usize]) -> Self {
+        fn place<A: Copy + Default>(answers: &[A], order: &[usize]) -> Vec<A> {
+            assert_eq!(answers.len(), order.len(), "one index per answer");
+            let mut out = vec![A::default(); answers.len()];
+            let mut seen = vec![false; answers.len()];
+            for (&a, &i) in answers.iter().zip(order) {
+                assert!(!std::mem::replace(&mut seen[i], true), "ray {i} twice");
+                out[i] = a;
+            }
+            out
+        }
+        match self {
+            Self::Nearest(v) => Self::Nearest(place(v, order)),
+            Self::Occluded(v) => Self::Occluded(place(v, order)),
         }
     }
 
@@ -385,6 +525,60 @@ mod tests {
         assert_eq!(blocked.summary().t_sum, None);
     }
 
+    /// A tool without packets: its nearest hit is the ray's `x` when that
+    /// is even, and it counts its single-ray queries.
+    struct EvenX(std::cell::Cell<u32>);
+
+    impl Tracer for EvenX {
+        fn nearest(&self, ray: &Ray<f32>) -> Option<PeerHit> {
+            self.0.set(self.0.get() + 1);
+            let x = ray.origin.x as u32;
+            x.is_multiple_of(2).then_some(PeerHit {
+                t: ray.origin.x,
+                prim: x,
+            })
+        }
+
+        fn occluded(&self, ray: &Ray<f32>) -> bool {
+            self.nearest(ray).is_some()
+        }
+    }
+
+    #[test]
+    fn the_default_packets_loop_the_single_queries_and_claim_no_width() {
+        let tool = EvenX(std::cell::Cell::new(0));
+        assert!(tool.packet_widths().is_empty());
+        let rays: Vec<_> = (0..21).map(ray).collect();
+        let single = SetAnswers::Nearest(rays.iter().map(|r| tool.nearest(r)).collect());
+        for width in [1, 8, 16] {
+            let got = packet_answers(&tool, width, false, false, &rays);
+            assert_eq!(got, single, "{width}");
+            let any = packet_answers(&tool, width, true, true, &rays);
+            assert_eq!(any.summary().hits, 11);
+            assert_eq!(count_packet_hits(&tool, width, false, false, &rays), 11);
+        }
+        // 21 singles, then 3 × (21 + 21 + 21) through the packets.
+        assert_eq!(tool.0.get(), 21 + 3 * 63);
+    }
+
+    #[test]
+    fn answers_in_bundle_order_go_back_to_the_set_s_order() {
+        let hit = |t: f32| Some(PeerHit { t, prim: t as u32 });
+        // Rays 2, 0, 3, 1 were traced in that order.
+        let traced = SetAnswers::Nearest(vec![hit(2.0), hit(0.0), None, hit(1.0)]);
+        assert_eq!(
+            traced.in_set_order(&[2, 0, 3, 1]),
+            SetAnswers::Nearest(vec![hit(0.0), hit(1.0), hit(2.0), None])
+        );
+        let blocked = SetAnswers::Occluded(vec![true, false, false]);
+        assert_eq!(
+            blocked.in_set_order(&[1, 2, 0]),
+            SetAnswers::Occluded(vec![false, true, false])
+        );
+        let twice = std::panic::catch_unwind(|| blocked.in_set_order(&[1, 1, 0]));
+        assert!(twice.is_err());
+    }
+
     #[test]
     fn rays_are_moved_to_start_at_zero() {
         let r = Ray {
@@ -497,6 +691,22 @@ mod tests {
             let half = SetAnswers::Occluded(halfway.iter().map(|r| peer.occluded(r)).collect());
             let a = compare(&clear, "brute", &half, kind.name, &halfway, 3);
             assert!(a.agrees(), "{} (halfway): {a:?}", kind.name);
+            // The same through the packet queries of a tool that has them.
+            for &width in peer.packet_widths() {
+                for coherent in [false, true] {
+                    let name = format!("{} in packets of {width}", kind.name);
+                    let p = peer.as_ref();
+                    let nearest = packet_answers(p, width, coherent, false, &clean);
+                    let a = compare(&reference, "brute", &nearest, &name, &clean, 3);
+                    assert!(a.agrees(), "{name}: {a:?}");
+                    let any = packet_answers(p, width, coherent, true, &clean);
+                    let a = compare(&blocked, "brute", &any, &name, &clean, 3);
+                    assert!(a.agrees(), "{name}: {a:?}");
+                    let half = packet_answers(p, width, coherent, true, &halfway);
+                    let a = compare(&clear, "brute", &half, &name, &halfway, 3);
+                    assert!(a.agrees(), "{name} (halfway): {a:?}");
+                }
+            }
         }
     }
 }

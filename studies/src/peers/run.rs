@@ -10,6 +10,18 @@
 //! [`MIN_PASSES`] passes; the figure is the median pass. Nearest hit for
 //! primary, diffuse and file rays, any hit for shadow rays.
 //!
+//! Beside each single-ray figure, a bundle figure: ours through
+//! [`Accelerator::intersect_bundle`] and [`Accelerator::occluded_bundle`],
+//! [`bench::BUNDLE`] rays at a time, as `render bench`'s `bundles 1T`;
+//! Embree through its packet queries, 16 and 8 rays at a time
+//! ([`super::Tracer::nearest_packet`]). Every tool's bundles take the same
+//! rays in the same order, [`RaySet::bundle_order`]: an image's primary
+//! rays by [`bench::TILE`] × [`bench::TILE`] tiles, other sets as they are.
+//! Tools without packet queries (obvhs, parry3d, bvh) get no bundle figure,
+//! rather than a loop of single rays presented as one. Bundle answers are
+//! compared with the tool's own single-ray answers: ours must be the same
+//! bit for bit (an error otherwise), Embree's are compared as the peers are.
+//!
 //! A tool whose pass would take longer than `--max-pass-time` (estimated
 //! from a sample of the set) is skipped on that set, with a note. Every
 //! tool's answers are compared ray by ray with those of the first of ours
@@ -26,7 +38,7 @@ use render::bench::{self, Answers, RayKind, RaySet};
 use render::cli::{min_time_parser, side_parser};
 use render::output::PendingFile;
 
-use accel_core::{Accelerator, Ray};
+use accel_core::{Accelerator, Hit, QueryError, Ray};
 use anyhow::{Context, Result, anyhow};
 use clap::builder::PossibleValuesParser;
 use clap::{Args, ValueEnum};
@@ -167,6 +179,24 @@ pub struct BuildFigure {
     pub rounds_ms: Vec<f64>,
 }
 
+/// One tool on one ray set through its bundle (packet) queries.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BundleFigure {
+    /// Rays per bundle: [`bench::BUNDLE`] for ours, the packet width for
+    /// Embree.
+    pub rays_per_bundle: usize,
+    /// Millions of rays per second, one thread, median pass.
+    pub mrays: f64,
+    /// Timed passes.
+    pub passes: usize,
+    /// Hits, `t` sum and digest of `(t, triangle)`, in the set's order.
+    #[serde(flatten)]
+    pub answers: Answers,
+    /// Differences from the same tool's single-ray answers (ours are also
+    /// checked bit for bit, `u` and `v` included).
+    pub agreement: Agreement,
+}
+
 /// One tool on one ray set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SetFigure {
@@ -186,6 +216,9 @@ pub struct SetFigure {
     pub reference: String,
     /// Differences from the reference.
     pub agreement: Agreement,
+    /// The same rays through the tool's bundle queries, one figure per
+    /// bundle size; none for a tool without packet queries.
+    pub bundles: Vec<BundleFigure>,
 }
 
 /// A peer that is not compiled in.
@@ -283,6 +316,102 @@ impl Tool<'_> {
                     SetAnswers::Nearest(set.rays.iter().map(|r| p.nearest(r)).collect())
                 }
             }
+        })
+    }
+
+    /// The bundle sizes of the tool's bundle queries: [`bench::BUNDLE`]
+    /// for ours, a peer's packet widths (none for a peer without packets).
+    fn bundle_sizes(&self) -> Vec<usize> {
+        match self {
+            Tool::Ours(..) => vec![bench::BUNDLE],
+            Tool::Peer(_, p) => p.packet_widths().to_vec(),
+        }
+    }
+
+    /// Every answer to `set` through the bundle queries, `size` rays at a
+    /// time over `ordered`, the set's rays in the order `order` gives
+    /// ([`RaySet::bundle_order`]), put back in the set's order. Ours are
+    /// checked against their single-ray answers bit for bit.
+    ///
+    /// # Errors
+    /// A ray ours refuse, or an answer of ours that differs from the
+    /// single-ray one.
+    fn bundle_answers(
+        &self,
+        size: usize,
+        coherent: bool,
+        set: &RaySet<f32>,
+        ordered: &[Ray<f32>],
+        order: &[usize],
+    ) -> Result<SetAnswers> {
+        let any = set.kind.any_hit();
+        let in_bundle_order = match self {
+            Tool::Ours(k, a) => {
+                let mismatch = |j: usize, bundle: String, single: String| {
+                    anyhow!(
+                        "{k}: the bundle query answers {} ray {} {bundle}, the single-ray query {single}",
+                        set.kind.name(),
+                        order[j]
+                    )
+                };
+                let refused =
+                    |j: usize, e| anyhow!("{k} refused {} ray {}: {e}", set.kind.name(), order[j]);
+                if any {
+                    let mut out = vec![Ok(false); ordered.len()];
+                    for (rays, answers) in ordered.chunks(size).zip(out.chunks_mut(size)) {
+                        a.occluded_bundle(rays, answers);
+                    }
+                    let mut blocked = Vec::with_capacity(out.len());
+                    for (j, (got, ray)) in out.into_iter().zip(ordered).enumerate() {
+                        let single = a.occluded(ray);
+                        if got != single {
+                            return Err(mismatch(j, format!("{got:?}"), format!("{single:?}")));
+                        }
+                        blocked.push(got.map_err(|e| refused(j, e))?);
+                    }
+                    SetAnswers::Occluded(blocked)
+                } else {
+                    let mut out = vec![Ok(None); ordered.len()];
+                    for (rays, answers) in ordered.chunks(size).zip(out.chunks_mut(size)) {
+                        a.intersect_bundle(rays, answers);
+                    }
+                    let bits = |r: &Result<Option<Hit<f32>>, QueryError>| {
+                        r.as_ref().map(|h| h.map(|h| h.bit_key())).map_err(|e| *e)
+                    };
+                    let mut hits = Vec::with_capacity(out.len());
+                    for (j, (got, ray)) in out.into_iter().zip(ordered).enumerate() {
+                        let single = a.intersect(ray);
+                        if bits(&got) != bits(&single) {
+                            return Err(mismatch(j, format!("{got:?}"), format!("{single:?}")));
+                        }
+                        hits.push(got.map_err(|e| refused(j, e))?.map(|h| PeerHit {
+                            t: h.t,
+                            prim: h.prim,
+                        }));
+                    }
+                    SetAnswers::Nearest(hits)
+                }
+            }
+            Tool::Peer(_, p) => super::packet_answers(p.as_ref(), size, coherent, any, ordered),
+        };
+        Ok(in_bundle_order.in_set_order(order))
+    }
+
+    /// One timed pass over `ordered` through the bundle queries, `size`
+    /// rays at a time: the hits.
+    fn bundle_pass(
+        &self,
+        size: usize,
+        coherent: bool,
+        any: bool,
+        ordered: &[Ray<f32>],
+    ) -> Result<u64> {
+        Ok(match self {
+            Tool::Ours(_, a) => {
+                debug_assert_eq!(size, bench::BUNDLE);
+                bench::count_bundle_hits(a.as_ref(), any, ordered)?
+            }
+            Tool::Peer(_, p) => super::count_packet_hits(p.as_ref(), size, coherent, any, ordered),
         })
     }
 
@@ -502,6 +631,10 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
     for set in &sets {
         let any = set.kind.any_hit();
         let mut reference: Option<(SetAnswers, &str)> = None;
+        // The order of every tool's bundles, and the rays in it.
+        let indices: Vec<usize> = (0..set.rays.len()).collect();
+        let order = set.bundle_order(&indices);
+        let ordered = set.bundle_order(&set.rays);
         let stride = set.rays.len().div_ceil(PROBE_RAYS).max(1);
         let sample: Vec<Ray<f32>> = set.rays.iter().step_by(stride).copied().collect();
         for tool in &tools {
@@ -544,6 +677,12 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 &set.rays,
                 EXAMPLES,
             );
+            let mut bundles = Vec::new();
+            for size in tool.bundle_sizes() {
+                bundles.push(measure_bundles(
+                    tool, size, set, &ordered, &order, &answers, min_time,
+                )?);
+            }
             figures.push(SetFigure {
                 name: tool.name().to_owned(),
                 kind: set.kind,
@@ -552,6 +691,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 answers: summary,
                 reference: (*ref_name).to_owned(),
                 agreement,
+                bundles,
             });
         }
     }
@@ -574,6 +714,71 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         println!("{line}");
     }
     Ok(report)
+}
+
+/// Whether the bundles of `set` are coherent: the neighbouring pixels of
+/// an image's tiles. A hint for tools that ask for one (Embree's
+/// `RTC_INTERSECT_CONTEXT_FLAG_COHERENT`); ours find coherence themselves.
+/// Embree with the flag on every set (sphere_100k and the bunny,
+/// 2026-12-06, two runs each): diffuse packets at 0.45–0.55× their speed
+/// without it, shadow packets at 0.9–1.2× (once 1.6× against a slow run),
+/// so only the tiles get it.
+fn coherent(set: &RaySet<f32>) -> bool {
+    set.image_width.is_some()
+}
+
+/// `tool` on `set` through its bundle queries, `size` rays at a time over
+/// `ordered` (the set's rays in the order `order` gives): answers, checked
+/// against the tool's single-ray `single` ones, then timed passes.
+///
+/// # Errors
+/// As [`Tool::bundle_answers`].
+fn measure_bundles(
+    tool: &Tool<'_>,
+    size: usize,
+    set: &RaySet<f32>,
+    ordered: &[Ray<f32>],
+    order: &[usize],
+    single: &SetAnswers,
+    min_time: Duration,
+) -> Result<BundleFigure> {
+    let any = set.kind.any_hit();
+    let coherent = coherent(set);
+    let name = tool.name();
+    let answers = tool.bundle_answers(size, coherent, set, ordered, order)?;
+    let summary = answers.summary();
+    let mut timed = 0;
+    let times = bench::pass_times(min_time, MIN_PASSES, || -> Result<()> {
+        timed = black_box(tool.bundle_pass(size, coherent, any, black_box(ordered))?);
+        Ok(())
+    })?;
+    if timed != summary.hits {
+        println!(
+            "warning: {name} in bundles of {size} gave {} hits on {} rays when recording answers but {timed} when timed",
+            summary.hits,
+            set.kind.name()
+        );
+    }
+    let agreement = compare(
+        single,
+        &format!("{name} single"),
+        &answers,
+        &bundle_name(name, size),
+        &set.rays,
+        EXAMPLES,
+    );
+    Ok(BundleFigure {
+        rays_per_bundle: size,
+        mrays: bench::rays_per_second(set.rays.len(), bench::median(&times)),
+        passes: times.len(),
+        answers: summary,
+        agreement,
+    })
+}
+
+/// `embree x16`: a tool in bundles of `size` rays, in reports.
+fn bundle_name(name: &str, size: usize) -> String {
+    format!("{name} x{size}")
 }
 
 fn print_unavailable(unavailable: &[Unavailable]) {
@@ -610,6 +815,252 @@ fn figure<'r>(report: &'r PeersReport, name: &str, kind: RayKind) -> Option<&'r 
         .find(|f| f.name == name && f.kind == kind)
 }
 
+/// The bundle sizes `name` was measured with, in order of first
+/// appearance (none for a tool without packet queries).
+fn bundle_sizes_of(report: &PeersReport, name: &str) -> Vec<usize> {
+    let mut sizes = Vec::new();
+    for f in report.sets.iter().filter(|f| f.name == name) {
+        for b in &f.bundles {
+            if !sizes.contains(&b.rays_per_bundle) {
+                sizes.push(b.rays_per_bundle);
+            }
+        }
+    }
+    sizes
+}
+
+/// The bundle figure of `name` on `kind` in bundles of `size`.
+fn bundle_figure<'r>(
+    report: &'r PeersReport,
+    name: &str,
+    kind: RayKind,
+    size: usize,
+) -> Option<&'r BundleFigure> {
+    figure(report, name, kind)?
+        .bundles
+        .iter()
+        .find(|b| b.rays_per_bundle == size)
+}
+
+/// The throughput table: per tool, one row per bundle size, with the
+/// single-ray figure and beside it the bundle one, per ray kind.
+fn throughput_lines(report: &PeersReport, kinds: &[RayKind], out: &mut Vec<String>) {
+    let mut header = format!("{:<14} {:>6}", "Mrays/s", "bundle");
+    for k in kinds {
+        header.push_str(&format!(" {:>9} {:>9}", k.name(), "bundled"));
+    }
+    out.push(header);
+    for b in &report.builds {
+        let sizes = bundle_sizes_of(report, &b.name);
+        // A tool without bundles still gets one row, its bundles "-".
+        let rows: Vec<Option<usize>> = if sizes.is_empty() {
+            vec![None]
+        } else {
+            sizes.into_iter().map(Some).collect()
+        };
+        for (row, size) in rows.into_iter().enumerate() {
+            let mut line = format!(
+                "{:<14} {:>6}",
+                b.name,
+                size.map_or("-".to_owned(), |s| s.to_string())
+            );
+            for &k in kinds {
+                let f = figure(report, &b.name, k);
+                // The single-ray figure once per tool, on its first row.
+                let single = match f {
+                    _ if row > 0 => String::new(),
+                    Some(f) => format!("{:.2}", f.mrays),
+                    None => "skipped".to_owned(),
+                };
+                let bundled = match (f, size) {
+                    (None, _) => "skipped".to_owned(),
+                    (Some(_), None) => "-".to_owned(),
+                    (Some(_), Some(size)) => bundle_figure(report, &b.name, k, size)
+                        .map_or("-".to_owned(), |g| format!("{:.2}", g.mrays)),
+                };
+                line.push_str(&format!(" {single:>9} {bundled:>9}"));
+            }
+            out.push(line);
+        }
+    }
+    out.push(
+        "bundled: the same rays in the same order, in bundles of the size shown: ours through intersect_bundle/occluded_bundle,"
+            .to_owned(),
+    );
+    out.push(format!(
+        "  Embree through its rtcIntersect/rtcOccluded packets; camera rays by {t} x {t} tiles; -: no packet queries",
+        t = bench::TILE
+    ));
+}
+
+/// The ratios of ours to the peers, single rays, then ours in bundles to
+/// Embree one ray at a time and in packets.
+fn ratio_lines(report: &PeersReport, kinds: &[RayKind], out: &mut Vec<String>) {
+    // Ratios of ours to the best Rust peer and to Embree, per kind.
+    let rust_peers: Vec<&str> = super::peer_kinds()
+        .iter()
+        .filter(|k| k.rust)
+        .map(|k| k.name)
+        .collect();
+    let best_rust = |k: RayKind| {
+        report
+            .sets
+            .iter()
+            .filter(|f| f.kind == k && rust_peers.contains(&f.name.as_str()))
+            .max_by(|a, b| a.mrays.total_cmp(&b.mrays))
+    };
+    let has_rust = kinds.iter().any(|&k| best_rust(k).is_some());
+    let has_embree = kinds.iter().any(|&k| figure(report, EMBREE, k).is_some());
+    if has_rust || has_embree {
+        out.push(String::new());
+        out.push("ours / peer, one ray at a time (> 1: ours faster)".to_owned());
+        let mut header = format!("{:<14}", "");
+        for k in kinds {
+            if has_rust {
+                header.push_str(&format!(" {:>21}", format!("{} / best Rust", k.name())));
+            }
+            if has_embree {
+                header.push_str(&format!(" {:>17}", format!("{} / Embree", k.name())));
+            }
+        }
+        out.push(header);
+        for b in report.builds.iter().filter(|b| b.ours) {
+            let mut line = format!("{:<14}", b.name);
+            for &k in kinds {
+                let ours = figure(report, &b.name, k).map(|f| f.mrays);
+                if has_rust {
+                    let cell = match (ours, best_rust(k)) {
+                        (Some(o), Some(p)) => format!("{:.2} ({})", o / p.mrays, p.name),
+                        _ => "-".to_owned(),
+                    };
+                    line.push_str(&format!(" {cell:>21}"));
+                }
+                if has_embree {
+                    let cell = match (ours, figure(report, EMBREE, k)) {
+                        (Some(o), Some(e)) => format!("{:.2}", o / e.mrays),
+                        _ => "-".to_owned(),
+                    };
+                    line.push_str(&format!(" {cell:>17}"));
+                }
+            }
+            out.push(line);
+        }
+    }
+    // Ours in bundles against Embree's rtcIntersect1/rtcOccluded1 and
+    // against its fastest packets on the same set.
+    let ours_bundled = |name: &str, k: RayKind| {
+        figure(report, name, k)
+            .and_then(|f| f.bundles.first())
+            .map(|b| b.mrays)
+    };
+    let embree_packets = |k: RayKind| {
+        figure(report, EMBREE, k)?
+            .bundles
+            .iter()
+            .max_by(|a, b| a.mrays.total_cmp(&b.mrays))
+    };
+    let any_ours_bundled = report
+        .builds
+        .iter()
+        .filter(|b| b.ours)
+        .any(|b| kinds.iter().any(|&k| ours_bundled(&b.name, k).is_some()));
+    if has_embree && any_ours_bundled {
+        out.push(String::new());
+        out.push(format!(
+            "ours in bundles of {} / Embree one ray at a time (rtc1) and in its fastest packets (> 1: ours faster)",
+            bench::BUNDLE
+        ));
+        let mut header = format!("{:<14}", "");
+        for k in kinds {
+            header.push_str(&format!(" {:>15}", format!("{} / rtc1", k.name())));
+            header.push_str(&format!(" {:>18}", format!("{} / packets", k.name())));
+        }
+        out.push(header);
+        for b in report.builds.iter().filter(|b| b.ours) {
+            let mut line = format!("{:<14}", b.name);
+            for &k in kinds {
+                let ours = ours_bundled(&b.name, k);
+                let single = match (ours, figure(report, EMBREE, k)) {
+                    (Some(o), Some(e)) => format!("{:.2}", o / e.mrays),
+                    _ => "-".to_owned(),
+                };
+                let packets = match (ours, embree_packets(k)) {
+                    (Some(o), Some(p)) => format!("{:.2} (x{})", o / p.mrays, p.rays_per_bundle),
+                    _ => "-".to_owned(),
+                };
+                line.push_str(&format!(" {single:>15} {packets:>18}"));
+            }
+            out.push(line);
+        }
+    }
+}
+
+/// The agreement table: each tool's single-ray answers against the
+/// reference, then each tool's bundle answers against its own single-ray
+/// ones; the first differing rays.
+fn agreement_lines(report: &PeersReport, kinds: &[RayKind], out: &mut Vec<String>) {
+    out.push(String::new());
+    out.push(format!(
+        "agreement with the reference (rays differing: hit/miss, triangle, t by > {:e} relative); bundles (x64, x16, ...) with the tool's own single rays",
+        report.t_tolerance
+    ));
+    out.push(format!(
+        "{:<18} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
+        "tool", "rays", "count", "hits", "t sum", "hit/miss", "triangle", "t", "reference"
+    ));
+    let mut examples = Vec::new();
+    let mut disagreeing = 0;
+    let t_sum = |a: &Answers| a.t_sum.map_or("-".to_owned(), |t| format!("{t:.9e}"));
+    for &k in kinds {
+        for f in report.sets.iter().filter(|f| f.kind == k) {
+            let rows = std::iter::once((
+                f.name.clone(),
+                &f.answers,
+                &f.agreement,
+                f.reference.clone(),
+            ))
+            .chain(f.bundles.iter().map(|b| {
+                (
+                    bundle_name(&f.name, b.rays_per_bundle),
+                    &b.answers,
+                    &b.agreement,
+                    format!("{} single", f.name),
+                )
+            }));
+            for (name, answers, a, reference) in rows {
+                out.push(format!(
+                    "{:<18} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
+                    name,
+                    k.name(),
+                    a.rays,
+                    answers.hits,
+                    t_sum(answers),
+                    a.hit_miss,
+                    a.prim,
+                    a.t,
+                    reference
+                ));
+                if !a.agrees() {
+                    disagreeing += 1;
+                }
+                examples.extend(
+                    a.examples
+                        .iter()
+                        .map(|e| format!("  {name} {}: {e}", k.name())),
+                );
+            }
+        }
+    }
+    if disagreeing == 0 {
+        out.push("every tool agrees on every ray".to_owned());
+    } else {
+        out.push(format!(
+            "{disagreeing} rows differ from their reference; first differing rays:"
+        ));
+        out.extend(examples);
+    }
+}
+
 /// The report as printed: builds, throughput, ratios, agreement.
 #[must_use]
 pub fn report_lines(report: &PeersReport) -> Vec<String> {
@@ -631,119 +1082,214 @@ pub fn report_lines(report: &PeersReport) -> Vec<String> {
         ));
     }
     out.push(String::new());
-    let mut header = format!("{:<14}", "Mrays/s");
-    for k in &kinds {
-        header.push_str(&format!(" {:>9}", k.name()));
-    }
-    out.push(header);
-    for b in &report.builds {
-        let mut line = format!("{:<14}", b.name);
-        for &k in &kinds {
-            let v = figure(report, &b.name, k)
-                .map_or("skipped".to_owned(), |f| format!("{:.2}", f.mrays));
-            line.push_str(&format!(" {v:>9}"));
-        }
-        out.push(line);
-    }
-    // Ratios of ours to the best Rust peer and to Embree, per kind.
-    let rust_peers: Vec<&str> = super::peer_kinds()
-        .iter()
-        .filter(|k| k.rust)
-        .map(|k| k.name)
-        .collect();
-    let best_rust = |k: RayKind| {
-        report
-            .sets
-            .iter()
-            .filter(|f| f.kind == k && rust_peers.contains(&f.name.as_str()))
-            .max_by(|a, b| a.mrays.total_cmp(&b.mrays))
-    };
-    let has_rust = kinds.iter().any(|&k| best_rust(k).is_some());
-    let has_embree = kinds.iter().any(|&k| figure(report, EMBREE, k).is_some());
-    if has_rust || has_embree {
-        out.push(String::new());
-        out.push("ours / peer (> 1: ours faster)".to_owned());
-        let mut header = format!("{:<14}", "");
-        for k in &kinds {
-            if has_rust {
-                header.push_str(&format!(" {:>21}", format!("{} / best Rust", k.name())));
-            }
-            if has_embree {
-                header.push_str(&format!(" {:>17}", format!("{} / Embree", k.name())));
-            }
-        }
-        out.push(header);
-        for b in report.builds.iter().filter(|b| b.ours) {
-            let mut line = format!("{:<14}", b.name);
-            for &k in &kinds {
-                let ours = figure(report, &b.name, k).map(|f| f.mrays);
-                if has_rust {
-                    let cell = match (ours, best_rust(k)) {
-                        (Some(o), Some(p)) => format!("{:.2} ({})", o / p.mrays, p.name),
-                        _ => "-".to_owned(),
-                    };
-                    line.push_str(&format!(" {cell:>21}"));
-                }
-                if has_embree {
-                    let cell = match (ours, figure(report, EMBREE, k)) {
-                        (Some(o), Some(e)) => format!("{:.2}", o / e.mrays),
-                        _ => "-".to_owned(),
-                    };
-                    line.push_str(&format!(" {cell:>17}"));
-                }
-            }
-            out.push(line);
-        }
-    }
-    out.push(String::new());
-    out.push(format!(
-        "agreement with the reference (rays differing: hit/miss, triangle, t by > {:e} relative)",
-        report.t_tolerance
-    ));
-    out.push(format!(
-        "{:<14} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
-        "tool", "rays", "count", "hits", "t sum", "hit/miss", "triangle", "t", "reference"
-    ));
-    let mut examples = Vec::new();
-    for &k in &kinds {
-        for f in report.sets.iter().filter(|f| f.kind == k) {
-            let a = &f.agreement;
-            out.push(format!(
-                "{:<14} {:<8} {:>9} {:>9} {:>17} {:>9} {:>9} {:>9}  {}",
-                f.name,
-                k.name(),
-                a.rays,
-                f.answers.hits,
-                f.answers
-                    .t_sum
-                    .map_or("-".to_owned(), |t| format!("{t:.9e}")),
-                a.hit_miss,
-                a.prim,
-                a.t,
-                f.reference
-            ));
-            examples.extend(
-                a.examples
-                    .iter()
-                    .map(|e| format!("  {} {}: {e}", f.name, k.name())),
-            );
-        }
-    }
-    let disagreeing = report.sets.iter().filter(|f| !f.agreement.agrees()).count();
-    if disagreeing == 0 {
-        out.push("every tool agrees on every ray".to_owned());
-    } else {
-        out.push(format!(
-            "{disagreeing} tool/set pairs differ from the reference; first differing rays:"
-        ));
-        out.extend(examples);
-    }
+    throughput_lines(report, &kinds, &mut out);
+    ratio_lines(report, &kinds, &mut out);
+    agreement_lines(report, &kinds, &mut out);
     out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn answers(hits: u64) -> Answers {
+        Answers {
+            hits,
+            t_sum: None,
+            digest: hits,
+        }
+    }
+
+    fn agreement(rays: u64, hit_miss: u64) -> Agreement {
+        Agreement {
+            rays,
+            hit_miss,
+            examples: (0..hit_miss).map(|i| format!("ray {i}: differs")).collect(),
+            ..Agreement::default()
+        }
+    }
+
+    fn bundle(size: usize, mrays: f64) -> BundleFigure {
+        BundleFigure {
+            rays_per_bundle: size,
+            mrays,
+            passes: 3,
+            answers: answers(7),
+            agreement: agreement(100, 0),
+        }
+    }
+
+    fn set(name: &str, kind: RayKind, mrays: f64, bundles: Vec<BundleFigure>) -> SetFigure {
+        SetFigure {
+            name: name.to_owned(),
+            kind,
+            mrays,
+            passes: 3,
+            answers: answers(7),
+            reference: "grid".to_owned(),
+            agreement: agreement(100, 0),
+            bundles,
+        }
+    }
+
+    fn build(name: &str, ours: bool) -> BuildFigure {
+        BuildFigure {
+            name: name.to_owned(),
+            ours,
+            build_ms: 1.0,
+            mtris_per_s: 1.0,
+            rounds_ms: vec![1.0],
+        }
+    }
+
+    /// Ours (grid, kdtree), a Rust peer without packets (obvhs) and Embree
+    /// with packets of 16 and 8, on primary and shadow rays; Embree's
+    /// 8-wide shadow packets disagree with its single rays on one ray.
+    fn report() -> PeersReport {
+        let (p, s) = (RayKind::Primary, RayKind::Shadow);
+        let mut x8 = bundle(8, 16.0);
+        x8.agreement = agreement(100, 1);
+        PeersReport {
+            scene: "test".to_owned(),
+            triangles: 10,
+            ray_source: "generated".to_owned(),
+            ray_sets: vec![(p, 100), (s, 100)],
+            min_time_s: 0.0,
+            t_tolerance: T_TOLERANCE,
+            build_rounds: 1,
+            builds: vec![
+                build("grid", true),
+                build("kdtree", true),
+                build("obvhs", false),
+                build(EMBREE, false),
+            ],
+            sets: vec![
+                set("grid", p, 10.0, vec![bundle(64, 25.0)]),
+                set("grid", s, 30.0, vec![bundle(64, 33.0)]),
+                set("kdtree", p, 8.0, vec![bundle(64, 9.0)]),
+                set("obvhs", p, 5.0, Vec::new()),
+                set("obvhs", s, 6.0, Vec::new()),
+                set(EMBREE, p, 12.5, vec![bundle(16, 20.0), bundle(8, 16.0)]),
+                set(EMBREE, s, 15.0, vec![bundle(16, 22.0), x8]),
+            ],
+            unavailable: Vec::new(),
+            failed: Vec::new(),
+            skipped: vec![("kdtree".to_owned(), s, 99.0)],
+        }
+    }
+
+    /// The words of the first line of `lines` that starts with the words
+    /// `first`, at or after the first line that starts with `after`.
+    fn row<'l>(lines: &'l [String], after: &str, first: &[&str]) -> Vec<&'l str> {
+        let from = lines
+            .iter()
+            .position(|l| l.starts_with(after))
+            .unwrap_or_else(|| panic!("no line {after:?}: {lines:#?}"));
+        lines[from..]
+            .iter()
+            .map(|l| l.split_whitespace().collect::<Vec<_>>())
+            .find(|w| w.starts_with(first))
+            .unwrap_or_else(|| panic!("no line {first:?} after {after:?}: {lines:#?}"))
+    }
+
+    #[test]
+    fn the_report_shows_bundles_beside_single_rays() {
+        let lines = report_lines(&report());
+        let table = "Mrays/s";
+        assert_eq!(
+            row(&lines, table, &["Mrays/s"]),
+            [
+                "Mrays/s", "bundle", "primary", "bundled", "shadow", "bundled"
+            ]
+        );
+        // Tool, bundle size, then single and bundled per kind.
+        assert_eq!(
+            row(&lines, table, &["grid"]),
+            ["grid", "64", "10.00", "25.00", "30.00", "33.00"]
+        );
+        assert_eq!(
+            row(&lines, table, &["kdtree"]),
+            ["kdtree", "64", "8.00", "9.00", "skipped", "skipped"]
+        );
+        // No packets: no bundle figure, not a loop's.
+        assert_eq!(
+            row(&lines, table, &["obvhs"]),
+            ["obvhs", "-", "5.00", "-", "6.00", "-"]
+        );
+        // Embree: a row per packet width, the single figure once.
+        let embree: Vec<_> = lines
+            .iter()
+            .skip_while(|l| !l.starts_with(table))
+            .filter(|l| l.starts_with("embree "))
+            .take(2)
+            .map(|l| l.split_whitespace().collect::<Vec<_>>())
+            .collect();
+        assert_eq!(
+            embree,
+            [
+                vec!["embree", "16", "12.50", "20.00", "15.00", "22.00"],
+                vec!["embree", "8", "16.00", "16.00"],
+            ]
+        );
+    }
+
+    #[test]
+    fn the_report_compares_our_bundles_with_embree_single_and_packets() {
+        let lines = report_lines(&report());
+        let title = "ours in bundles of 64 / Embree";
+        assert_eq!(
+            row(&lines, title, &["primary", "/", "rtc1"]),
+            [
+                "primary", "/", "rtc1", "primary", "/", "packets", "shadow", "/", "rtc1", "shadow",
+                "/", "packets"
+            ]
+        );
+        // grid: 25 / 12.5 and 25 / 20 (x16, the faster); 33 / 15 and 33 / 22.
+        assert_eq!(
+            row(&lines, title, &["grid"]),
+            ["grid", "2.00", "1.25", "(x16)", "2.20", "1.50", "(x16)"]
+        );
+        assert_eq!(
+            row(&lines, title, &["kdtree"]),
+            ["kdtree", "0.72", "0.45", "(x16)", "-", "-"]
+        );
+        // The single-ray ratios stay: grid / obvhs and grid / Embree.
+        let single = "ours / peer, one ray at a time";
+        assert_eq!(
+            row(&lines, single, &["grid"]),
+            ["grid", "2.00", "(obvhs)", "0.80", "5.00", "(obvhs)", "2.00"]
+        );
+        // No Embree figure, no bundle ratios.
+        let mut without = report();
+        without.sets.retain(|f| f.name != EMBREE);
+        assert!(!report_lines(&without).iter().any(|l| l.starts_with(title)));
+    }
+
+    #[test]
+    fn the_report_checks_bundles_against_the_tool_s_single_rays() {
+        let lines = report_lines(&report());
+        let title = "agreement with the reference";
+        assert_eq!(
+            row(&lines, title, &["grid", "x64", "primary"]),
+            [
+                "grid", "x64", "primary", "100", "7", "-", "0", "0", "0", "grid", "single"
+            ]
+        );
+        assert_eq!(
+            row(&lines, title, &["embree", "x8", "shadow"]),
+            [
+                "embree", "x8", "shadow", "100", "7", "-", "1", "0", "0", "embree", "single"
+            ]
+        );
+        assert!(
+            lines.contains(&"1 rows differ from their reference; first differing rays:".to_owned())
+        );
+        assert!(lines.contains(&"  embree x8 shadow: ray 0: differs".to_owned()));
+        // Without the disagreement every row agrees.
+        let mut fixed = report();
+        fixed.sets.last_mut().unwrap().bundles[1].agreement = agreement(100, 0);
+        assert!(report_lines(&fixed).contains(&"every tool agrees on every ray".to_owned()));
+    }
 
     #[test]
     fn tool_names_are_ours_then_every_peer_once() {
