@@ -281,16 +281,24 @@ fn hashed<T: Real>(ray: &Ray<T>, one_in: u64) -> bool {
 
 #[test]
 fn a_tile_reports_the_refusal_the_pixels_would_meet_first() {
-    let scene = default_scene().unwrap();
+    let mut scene = default_scene().unwrap();
+    // The default occlusion distance is 1, the shadow rays' `t_max`: another
+    // tells the two kinds of rays apart (`Watched::check`).
+    scene.view.ao_distance = 0.75;
     let mesh = mesh_in::<f64>(&scene).unwrap();
     let kdtree = accel::build(AccelKind::KdTree, &mesh).unwrap();
-    let pickers: [fn(&Ray<f64>) -> bool; 4] = [
+    let pickers: [fn(&Ray<f64>) -> bool; 6] = [
         // Now and then any ray: most tiles fail, at various rays.
         |r| hashed(r, 97),
         // Rarely any ray: some tiles fail, others not.
         |r| hashed(r, 1500),
         // Secondary rays only, often.
         |r| r.t_max != f64::INFINITY && hashed(r, 7),
+        // Half the secondary rays: a pixel's shadow ray and some of its
+        // occlusion rays are often refused in the same sample.
+        |r| r.t_max != f64::INFINITY && hashed(r, 2),
+        // Shadow rays only.
+        |r| r.t_max == 1.0 && hashed(r, 5),
         // Camera rays only, now and then.
         |r| r.t_max == f64::INFINITY && hashed(r, 11),
     ];
