@@ -40,7 +40,7 @@ pub struct PixelError {
     pub error: QueryError,
 }
 
-/// A pixel of the tile being shaded.
+/// A pixel of the block being shaded.
 #[derive(Default)]
 struct Slot {
     acc: PixelSum,
@@ -51,7 +51,7 @@ struct Slot {
 /// A hit camera ray of the sample being shaded: its pixel, surface, digest
 /// and where its rays lie in the block's bundles.
 struct Lit<T> {
-    /// Index of the pixel in the tile, row by row.
+    /// Index of the pixel in the block, row by row.
     slot: usize,
     surface: Surface<T>,
     h: u64,
@@ -137,44 +137,46 @@ impl<T: Real> Shader<'_, T> {
                 })
                 .collect();
         }
-        let mut slots: Vec<Slot> = tile.pixels().map(|_| Slot::default()).collect();
+        // Each block is finished (every sample) before the next begins, so
+        // the pixels' running sums live for one block only: a small working
+        // set beside the bundles.
+        let mut out = vec![Pixel::default(); tile.len()];
+        let mut first: Option<PixelError> = None;
+        let mut slots: Vec<Slot> = Vec::with_capacity((BLOCK * BLOCK) as usize);
         let mut bundles = Bundles::new();
+        let w = tile.width() as usize;
         for block in tile.parts(BLOCK) {
+            slots.clear();
+            slots.resize_with(block.len(), Slot::default);
             for s in 0..self.spp {
-                self.block_sample(tile, block, s, &wanted, &mut slots, &mut bundles);
+                self.block_sample(block, s, &wanted, &mut slots, &mut bundles);
+            }
+            for ((x, y), slot) in block.pixels().zip(slots.drain(..)) {
+                let at = (y - tile.y0) as usize * w + (x - tile.x0) as usize;
+                match slot.error {
+                    // The first pixel of the tile, row by row, with a refusal.
+                    Some(error) => {
+                        let earlier = first.is_none_or(|f| (y, x) < (f.y, f.x));
+                        if earlier {
+                            first = Some(PixelError { x, y, error });
+                        }
+                    }
+                    None if wanted(x, y) => out[at] = slot.acc.finish(self.spp),
+                    None => {}
+                }
             }
         }
-        let w = tile.width() as usize;
-        if let Some((i, e)) = slots
-            .iter()
-            .enumerate()
-            .find_map(|(i, slot)| slot.error.map(|e| (i, e)))
-        {
-            return Err(PixelError {
-                x: tile.x0 + (i % w) as u32,
-                y: tile.y0 + (i / w) as u32,
-                error: e,
-            });
+        match first {
+            Some(e) => Err(e),
+            None => Ok(out),
         }
-        Ok(tile
-            .pixels()
-            .zip(slots)
-            .map(|((x, y), slot)| {
-                if wanted(x, y) {
-                    slot.acc.finish(self.spp)
-                } else {
-                    Pixel::default()
-                }
-            })
-            .collect())
     }
 
-    /// Shades sample `s` of the wanted pixels of `block` (a part of `tile`)
-    /// not yet refused, adding it to their slots, or recording their first
-    /// refusal.
+    /// Shades sample `s` of the wanted pixels of `block` not yet refused,
+    /// adding it to their slots (one per pixel of the block, row by row),
+    /// or recording their first refusal.
     fn block_sample(
         &self,
-        tile: Tile,
         block: Tile,
         s: u32,
         wanted: &impl Fn(u32, u32) -> bool,
@@ -182,9 +184,7 @@ impl<T: Real> Shader<'_, T> {
         b: &mut Bundles<T>,
     ) {
         b.clear();
-        let w = tile.width() as usize;
-        for (x, y) in block.pixels() {
-            let slot = (y - tile.y0) as usize * w + (x - tile.x0) as usize;
+        for (slot, (x, y)) in block.pixels().enumerate() {
             if !wanted(x, y) || slots[slot].error.is_some() {
                 continue;
             }
