@@ -17,7 +17,7 @@ use accel::{AccelConfig, AccelKind};
 
 use crate::scene::{Scene, SceneSource};
 use crate::shade::{Pixel, Shader, Tally, to_srgb8};
-use crate::tiles::{for_each_pixel, progress_bar};
+use crate::tiles::{for_each_tile, progress_bar};
 use accel_core::{
     Accelerator, MollerTrumboreMesh, PrimitiveSet, QueryError, Real, TriangleMesh, TriangleTest,
 };
@@ -134,7 +134,7 @@ pub fn load_scene(arg: &str) -> Result<Scene> {
 
 /// Bytes a render's image buffers take per pixel at their peak: the
 /// per-tile results and the assembled image, one [`Pixel`] each
-/// (`for_each_pixel` holds both while it assembles). Measured: 208 bytes a
+/// (`for_each_tile` holds both while it assembles). Measured: 208 bytes a
 /// pixel (`/usr/bin/time -f %M` of `render --accel grid --ao 0 --spp 1` at
 /// 1024² and 2048²: 224,004 KB and 863,884 KB), 2 × 104.
 pub const RENDER_BYTES_PER_PIXEL: u64 = 2 * size_of::<Pixel>() as u64;
@@ -324,16 +324,14 @@ fn render_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     };
     let bar = progress_bar(u64::from(w) * u64::from(h), "render");
     let start = Instant::now();
-    let pixels = for_each_pixel(w, h, &bar, |x, y| {
-        if shard.is_some_and(|s| !s.owns_row(y)) {
-            return Ok(Pixel::default());
-        }
-        shader.pixel(x, y).map_err(|e| {
-            let hint = match e {
+    let pixels = for_each_tile(w, h, &bar, |tile| {
+        let wanted = |_, y| shard.is_none_or(|s| s.owns_row(y));
+        shader.tile(tile, wanted).map_err(|p| {
+            let hint = match p.error {
                 QueryError::OriginOutOfRange { .. } => precision_hint::<T>(),
                 _ => "",
             };
-            anyhow::anyhow!("pixel ({x}, {y}) in {}: {e}{hint}", T::NAME)
+            anyhow::anyhow!("pixel ({}, {}) in {}: {}{hint}", p.x, p.y, T::NAME, p.error)
         })
     })?;
     let elapsed = start.elapsed();

@@ -8,7 +8,8 @@
 //!   built-in scene, with `--accel grid|octree|kdtree|brute|auto`, size,
 //!   samples, precision; diffuse shading with a shadow ray to one light and
 //!   ambient-occlusion rays ([`shade`]), traced in parallel tiles
-//!   ([`tiles`]) with a progress bar. `--accel auto` asks
+//!   ([`tiles`]) with a progress bar, each through bundles of coherent
+//!   rays ([`tile_shade`]). `--accel auto` asks
 //!   [`accel::choose_with_probe`] with the render's own probe rays
 //!   ([`probe`]).
 //! - `--heatmap` also writes the traversal cost per pixel ([`heatmap`]).
@@ -42,4 +43,5 @@ pub mod report;
 pub mod scene;
 pub mod shade;
 pub mod shard;
+pub mod tile_shade;
 pub mod tiles;

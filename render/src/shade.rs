@@ -191,6 +191,67 @@ pub fn spawn<T: Real>(
     }
 }
 
+/// A hit surface and the secondary rays it sends, before they are answered:
+/// what the per-pixel path ([`Shader::pixel`]) and the tile path
+/// ([`crate::tile_shade`]) both compute, with [`Shader::surface`], and both
+/// finish with [`Shader::lit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface<T> {
+    /// The surface's albedo at the hit point.
+    pub albedo: [f64; 3],
+    /// The shadow ray to the light and the cosine of the light's direction
+    /// to the normal, when the light is above the surface (and not at the
+    /// spawn point itself); `None` when no shadow ray is traced.
+    pub shadow: Option<(Ray<T>, f64)>,
+}
+
+/// One sample's camera ray and what shading it needs next.
+#[derive(Clone, Debug)]
+pub struct CameraSample<T> {
+    /// The camera ray through the (jittered) sample position.
+    pub ray: Ray<T>,
+    /// The pixel's random numbers for this sample, after the jitter: the
+    /// ambient-occlusion directions come next.
+    pub rng: SplitMix64,
+    /// The digest's seed for this pixel and sample.
+    pub seed: u64,
+}
+
+/// A pixel's sums over the samples shaded so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelSum {
+    /// Linear RGB summed over samples.
+    pub sum: [f64; 3],
+    /// Work and tally so far (`rgb` is set by [`PixelSum::finish`]).
+    pub pixel: Pixel,
+}
+
+impl PixelSum {
+    /// Counts a sample's primary ray and its answer; returns the sample's
+    /// running digest, seeded by `seed` and mixed with the hit's bits.
+    pub fn primary<T: Real>(&mut self, seed: u64, hit: Option<&Hit<T>>) -> u64 {
+        self.pixel.tally.primary += 1;
+        self.pixel.tally.primary_hits += u64::from(hit.is_some());
+        mix_hit(seed, hit)
+    }
+
+    /// Adds a finished sample: its colour and its digest `h`.
+    pub fn add_sample(&mut self, c: [f64; 3], h: u64) {
+        self.pixel.tally.digest = self.pixel.tally.digest.wrapping_add(h);
+        for (sum, c) in self.sum.iter_mut().zip(c) {
+            *sum += c;
+        }
+    }
+
+    /// The pixel: the colour averaged over `spp` samples.
+    #[must_use]
+    pub fn finish(mut self, spp: u32) -> Pixel {
+        let inv = 1.0 / f64::from(spp);
+        self.pixel.rgb = self.sum.map(|c| (c * inv) as f32);
+        self.pixel
+    }
+}
+
 impl<T: Real> Shader<'_, T> {
     fn intersect(
         &self,
@@ -212,64 +273,88 @@ impl<T: Real> Shader<'_, T> {
         }
     }
 
-    /// Shades pixel `(x, y)` (`(0, 0)` top left).
+    /// Sample `s` of pixel `(x, y)`: its random numbers (seeded by pixel
+    /// and sample), the jitter drawn from them (none at one sample per
+    /// pixel: the pixel's centre) and the camera ray through that point.
+    #[must_use]
+    pub fn camera_sample(&self, x: u32, y: u32, s: u32) -> CameraSample<T> {
+        let index = u64::from(y) * u64::from(self.width) + u64::from(x);
+        let seed = mix(index, u64::from(s));
+        let mut rng = SplitMix64::new(seed);
+        let (jx, jy) = if self.spp == 1 {
+            (0.5, 0.5)
+        } else {
+            (rng.next_f64(), rng.next_f64())
+        };
+        let ray = self.scene.view.camera.ray_through(
+            f64::from(x) + jx,
+            f64::from(y) + jy,
+            self.width,
+            self.height,
+        );
+        CameraSample { ray, rng, seed }
+    }
+
+    /// Shades pixel `(x, y)` (`(0, 0)` top left) one ray at a time: the
+    /// reference the tile path ([`crate::tile_shade`]) matches bit for bit,
+    /// and the path that counts traversal work (`count`), which has no
+    /// bundle query.
     ///
     /// # Errors
     /// A [`QueryError`] if a ray is not valid in this precision (a camera or
-    /// hit point that overflows `f32`, for example).
+    /// hit point that overflows `f32`, for example): the first met, in the
+    /// order the rays are traced (by sample; the camera ray, the shadow ray,
+    /// then the ambient-occlusion rays).
     pub fn pixel(&self, x: u32, y: u32) -> Result<Pixel, QueryError> {
-        let index = u64::from(y) * u64::from(self.width) + u64::from(x);
-        let mut out = Pixel::default();
-        let mut sum = [0.0f64; 3];
+        let mut acc = PixelSum::default();
+        let mut ao_rays = Vec::with_capacity(self.ao as usize);
         for s in 0..self.spp {
-            let mut rng = SplitMix64::new(mix(index, u64::from(s)));
-            let (jx, jy) = if self.spp == 1 {
-                (0.5, 0.5)
-            } else {
-                (rng.next_f64(), rng.next_f64())
-            };
-            let ray: Ray<T> = self.scene.view.camera.ray_through(
-                f64::from(x) + jx,
-                f64::from(y) + jy,
-                self.width,
-                self.height,
-            );
+            let CameraSample { ray, mut rng, seed } = self.camera_sample(x, y, s);
             let mut work = TraversalCounters::default();
             let hit = self.intersect(&ray, &mut work)?;
-            out.primary_work.add(&work);
-            out.tally.work.add(&work);
-            out.tally.primary += 1;
-            let mut h = mix_hit(mix(index, u64::from(s)), hit.as_ref());
+            acc.pixel.primary_work.add(&work);
+            acc.pixel.tally.work.add(&work);
+            let mut h = acc.primary(seed, hit.as_ref());
             let c = match hit {
                 None => self.sky(ray.direction.cast()),
                 Some(hit) => {
-                    out.tally.primary_hits += 1;
-                    self.surface(&ray, &hit, &mut rng, &mut out.tally, &mut h)?
+                    ao_rays.clear();
+                    let surface = self.surface(&ray, &hit, &mut rng, &mut ao_rays);
+                    let mut work = TraversalCounters::default();
+                    let blocked = match &surface.shadow {
+                        Some((shadow, _)) => Some(self.occluded(shadow, &mut work)?),
+                        None => None,
+                    };
+                    let mut ao_blocked = 0;
+                    for ao_ray in &ao_rays {
+                        ao_blocked += u32::from(self.occluded(ao_ray, &mut work)?);
+                    }
+                    acc.pixel.tally.work.add(&work);
+                    self.lit(&surface, blocked, ao_blocked, &mut acc.pixel.tally, &mut h)
                 }
             };
-            out.tally.digest = out.tally.digest.wrapping_add(h);
-            for i in 0..3 {
-                sum[i] += c[i];
-            }
+            acc.add_sample(c, h);
         }
-        let inv = 1.0 / f64::from(self.spp);
-        out.rgb = sum.map(|c| (c * inv) as f32);
-        Ok(out)
+        Ok(acc.finish(self.spp))
     }
 
-    fn sky(&self, d: Vec3<f64>) -> [f64; 3] {
+    /// The sky's colour in direction `d` (a camera ray that hits nothing).
+    #[must_use]
+    pub fn sky(&self, d: Vec3<f64>) -> [f64; 3] {
         let up = d.normalized().dot(self.scene.view.up);
         lerp(SKY_HORIZON, SKY_ZENITH, up.clamp(0.0, 1.0).sqrt())
     }
 
-    fn surface(
+    /// The surface `ray` hits at `hit` and its secondary rays: the shadow
+    /// ray, and the `ao` ambient-occlusion rays, appended to `ao_rays` in
+    /// the order their directions are drawn from `rng`.
+    pub fn surface(
         &self,
         ray: &Ray<T>,
         hit: &Hit<T>,
         rng: &mut SplitMix64,
-        tally: &mut Tally,
-        h: &mut u64,
-    ) -> Result<[f64; 3], QueryError> {
+        ao_rays: &mut Vec<Ray<T>>,
+    ) -> Surface<T> {
         let view = &self.scene.view;
         let Spawn {
             point: p,
@@ -279,57 +364,65 @@ impl<T: Real> Shader<'_, T> {
         let origin_t: Vec3<T> = origin.cast();
         let albedo = self.scene.albedo(hit.prim, p);
 
-        // Direct light: one shadow ray.
-        let mut direct = 0.0;
+        // Direct light: one shadow ray, if the light is above the surface.
         let to_light = view.light - origin;
         let cos = n.dot(to_light.normalized());
-        if cos > 0.0 {
-            let shadow = Ray {
+        let shadow = Ray {
+            origin: origin_t,
+            direction: to_light.cast(),
+            t_min: T::ZERO,
+            t_max: T::ONE,
+        };
+        let shadow = (cos > 0.0 && shadow.direction != Vec3::ZERO).then_some((shadow, cos));
+
+        // Ambient occlusion: cosine-distributed rays.
+        for _ in 0..self.ao {
+            let dir = cosine_direction(n, rng);
+            ao_rays.push(Ray {
                 origin: origin_t,
-                direction: to_light.cast(),
+                direction: dir.cast(),
                 t_min: T::ZERO,
-                t_max: T::ONE,
-            };
-            if shadow.direction != Vec3::ZERO {
-                let mut work = TraversalCounters::default();
-                let blocked = self.occluded(&shadow, &mut work)?;
-                tally.work.add(&work);
-                tally.shadow += 1;
-                tally.shadow_blocked += u64::from(blocked);
-                *h = mix(*h, u64::from(blocked));
-                if !blocked {
-                    direct = cos;
-                }
+                t_max: T::from_f64(view.ao_distance),
+            });
+        }
+        Surface { albedo, shadow }
+    }
+
+    /// The colour of `surface` given the answers to its secondary rays:
+    /// whether the shadow ray is blocked (`None` when none was traced) and
+    /// how many of the `ao` ambient-occlusion rays are. Counts the rays in
+    /// `tally` and mixes the answers into the sample's digest `h`.
+    pub fn lit(
+        &self,
+        surface: &Surface<T>,
+        shadow_blocked: Option<bool>,
+        ao_blocked: u32,
+        tally: &mut Tally,
+        h: &mut u64,
+    ) -> [f64; 3] {
+        let mut direct = 0.0;
+        if let (Some((_, cos)), Some(blocked)) = (surface.shadow, shadow_blocked) {
+            tally.shadow += 1;
+            tally.shadow_blocked += u64::from(blocked);
+            *h = mix(*h, u64::from(blocked));
+            if !blocked {
+                direct = cos;
             }
         }
 
-        // Ambient occlusion: the fraction of cosine-distributed rays that escape.
+        // The fraction of ambient-occlusion rays that escape.
         let mut open = 1.0;
         if self.ao > 0 {
-            let mut escaped = 0u32;
-            for _ in 0..self.ao {
-                let dir = cosine_direction(n, rng);
-                let ao_ray = Ray {
-                    origin: origin_t,
-                    direction: dir.cast(),
-                    t_min: T::ZERO,
-                    t_max: T::from_f64(view.ao_distance),
-                };
-                let mut work = TraversalCounters::default();
-                let blocked = self.occluded(&ao_ray, &mut work)?;
-                tally.work.add(&work);
-                tally.ao += 1;
-                tally.ao_blocked += u64::from(blocked);
-                escaped += u32::from(!blocked);
-            }
+            let escaped = self.ao - ao_blocked;
+            tally.ao += u64::from(self.ao);
+            tally.ao_blocked += u64::from(ao_blocked);
             *h = mix(*h, u64::from(escaped));
             open = f64::from(escaped) / f64::from(self.ao);
         }
 
         let sky = lerp(SKY_HORIZON, SKY_ZENITH, 0.5);
-        Ok(core::array::from_fn(|i| {
-            albedo[i] * (AMBIENT * open * sky[i] + direct * LIGHT[i])
-        }))
+        let albedo = surface.albedo;
+        core::array::from_fn(|i| albedo[i] * (AMBIENT * open * sky[i] + direct * LIGHT[i]))
     }
 }
 

@@ -22,12 +22,125 @@ pub fn progress_bar(pixels: u64, message: &'static str) -> ProgressBar {
     bar
 }
 
-/// Calls `f(x, y)` for every pixel of a `width × height` image, tile by tile
-/// in parallel, and returns the results row by row.
+/// A rectangle of pixels: columns `x0..x1` of rows `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tile {
+    /// The first column.
+    pub x0: u32,
+    /// The first row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl Tile {
+    /// Columns.
+    #[must_use]
+    pub const fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    /// Rows.
+    #[must_use]
+    pub const fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    /// Pixels.
+    #[must_use]
+    pub const fn len(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+
+    /// Whether it holds no pixel.
+    #[must_use]
+    pub const fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Its pixels `(x, y)`, row by row.
+    pub fn pixels(self) -> impl Iterator<Item = (u32, u32)> {
+        (self.y0..self.y1).flat_map(move |y| (self.x0..self.x1).map(move |x| (x, y)))
+    }
+
+    /// Its parts of at most `side` × `side` pixels, row by row (those of the
+    /// last rows and columns cut short).
+    ///
+    /// # Panics
+    /// If `side` is 0.
+    pub fn parts(self, side: u32) -> impl Iterator<Item = Self> {
+        assert!(side > 0, "parts of a positive side");
+        (self.y0..self.y1)
+            .step_by(side as usize)
+            .flat_map(move |y0| {
+                (self.x0..self.x1)
+                    .step_by(side as usize)
+                    .map(move |x0| Self {
+                        x0,
+                        y0,
+                        x1: (x0 + side).min(self.x1),
+                        y1: (y0 + side).min(self.y1),
+                    })
+            })
+    }
+}
+
+/// Calls `f(tile)` for every [`TILE`] × [`TILE`] tile of a `width × height`
+/// image (those of the last rows and columns cut short), in parallel, and
+/// returns the image row by row; `f` returns the tile's pixels row by row.
 ///
 /// # Errors
 /// The first error of `f` met (in tile order); the other tiles may or may not
 /// have run.
+///
+/// # Panics
+/// If `f` returns other than [`Tile::len`] pixels.
+pub fn for_each_tile<P, E, F>(
+    width: u32,
+    height: u32,
+    progress: &ProgressBar,
+    f: F,
+) -> Result<Vec<P>, E>
+where
+    P: Copy + Default + Send,
+    E: Send,
+    F: Fn(Tile) -> Result<Vec<P>, E> + Sync,
+{
+    let whole = Tile {
+        x0: 0,
+        y0: 0,
+        x1: width,
+        y1: height,
+    };
+    let tiles: Vec<Tile> = whole.parts(TILE).collect();
+    let done: Vec<Vec<P>> = tiles
+        .par_iter()
+        .map(|&tile| {
+            let out = f(tile)?;
+            assert_eq!(out.len(), tile.len(), "one result per pixel of {tile:?}");
+            progress.inc(out.len() as u64);
+            Ok(out)
+        })
+        .collect::<Result<_, E>>()?;
+    let mut image = vec![P::default(); width as usize * height as usize];
+    for (tile, pixels) in tiles.iter().zip(&done) {
+        let w = tile.width() as usize;
+        for (row, chunk) in pixels.chunks(w).enumerate() {
+            let start = (tile.y0 as usize + row) * width as usize + tile.x0 as usize;
+            image[start..start + w].copy_from_slice(chunk);
+        }
+    }
+    Ok(image)
+}
+
+/// Calls `f(x, y)` for every pixel of a `width × height` image, tile by tile
+/// in parallel ([`for_each_tile`]), and returns the results row by row.
+///
+/// # Errors
+/// The first error of `f` met (in tile order, row by row within a tile);
+/// the other tiles may or may not have run.
 pub fn for_each_pixel<P, E, F>(
     width: u32,
     height: u32,
@@ -39,35 +152,9 @@ where
     E: Send,
     F: Fn(u32, u32) -> Result<P, E> + Sync,
 {
-    let tiles_x = width.div_ceil(TILE);
-    let tiles_y = height.div_ceil(TILE);
-    let tiles: Vec<(u32, u32)> = (0..tiles_y)
-        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx * TILE, ty * TILE)))
-        .collect();
-    let done: Vec<Vec<P>> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let x1 = (x0 + TILE).min(width);
-            let y1 = (y0 + TILE).min(height);
-            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    out.push(f(x, y)?);
-                }
-            }
-            progress.inc(out.len() as u64);
-            Ok(out)
-        })
-        .collect::<Result<_, E>>()?;
-    let mut image = vec![P::default(); width as usize * height as usize];
-    for (&(x0, y0), tile) in tiles.iter().zip(&done) {
-        let w = ((x0 + TILE).min(width) - x0) as usize;
-        for (row, chunk) in tile.chunks(w).enumerate() {
-            let start = (y0 as usize + row) * width as usize + x0 as usize;
-            image[start..start + w].copy_from_slice(chunk);
-        }
-    }
-    Ok(image)
+    for_each_tile(width, height, progress, |tile| {
+        tile.pixels().map(|(x, y)| f(x, y)).collect()
+    })
 }
 
 #[cfg(test)]
@@ -99,5 +186,32 @@ mod tests {
             }
         });
         assert_eq!(r, Err("bad pixel"));
+    }
+
+    #[test]
+    fn parts_cover_a_tile_once_in_order() {
+        let tile = Tile {
+            x0: 16,
+            y0: 32,
+            x1: 29,
+            y1: 42,
+        };
+        let parts: Vec<Tile> = tile.parts(8).collect();
+        assert_eq!(
+            parts
+                .iter()
+                .map(|p| (p.x0, p.y0, p.x1, p.y1))
+                .collect::<Vec<_>>(),
+            [
+                (16, 32, 24, 40),
+                (24, 32, 29, 40),
+                (16, 40, 24, 42),
+                (24, 40, 29, 42)
+            ]
+        );
+        let mut seen: Vec<(u32, u32)> = parts.iter().flat_map(|p| p.pixels()).collect();
+        assert_eq!(seen.len(), tile.len());
+        seen.sort_unstable_by_key(|&(x, y)| (y, x));
+        assert_eq!(seen, tile.pixels().collect::<Vec<_>>());
     }
 }
