@@ -287,16 +287,8 @@ mod tests {
         ]
     }
 
-    fn lanes() -> impl Strategy<Value = [f64; PACKET]> {
-        proptest::array::uniform8(value())
-    }
-
     /// The SIMD crossing against the portable one, bit for bit, in `T`.
-    fn same_bits<T: Real>(
-        v: &[[f64; PACKET]; 8],
-        s: f64,
-        axis: usize,
-    ) -> Result<(), TestCaseError> {
+    fn same_bits<T: Real>(v: &[[f64; PACKET]], s: f64, axis: usize) -> Result<(), TestCaseError> {
         let t = |a: &[f64; PACKET]| a.map(T::from_f64);
         let rows = |a: &[f64; PACKET]| [t(a), t(a), t(a), t(a)];
         let rays = LaneRays {
@@ -325,10 +317,16 @@ mod tests {
         /// walk's, bit for bit, signed zeros, infinities and NaN included.
         #[test]
         fn lanes_cross_as_the_single_walk(
-            v in proptest::array::uniform8(lanes()),
+            // Eight rows of lanes, drawn on the heap (arrays of strategies
+            // overflow the test thread's stack in debug builds).
+            values in proptest::collection::vec(value(), 8 * PACKET),
             s in value(),
             axis in 0..3usize,
         ) {
+            let v: Vec<[f64; PACKET]> = values
+                .chunks(PACKET)
+                .map(|c| core::array::from_fn(|l| c[l]))
+                .collect();
             same_bits::<f32>(&v, s, axis)?;
             same_bits::<f64>(&v, s, axis)?;
         }
