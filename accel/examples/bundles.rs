@@ -2,7 +2,8 @@
 //! rays by 8 × 8 tiles), through any accelerator, and prints both
 //! throughputs on this thread for the nearest-hit and the any-hit query (a
 //! driver for profilers and for quick comparisons; `render bench` is the
-//! benchmark). Bundle answers are checked against the single ones.
+//! benchmark). Bundle answers are checked against the single ones
+//! ([`accel_core::check_bundle`]).
 //!
 //! Usage: `bundles [SCENE] [camera|random] [RAYS] [ACCEL] [RAY FILE]`
 //! (scene, ray kind and count as accel-grid's `trace`; `ACCEL` as
@@ -88,13 +89,12 @@ fn main() {
             }
         })
     };
-    if only.is_empty() {
-        let key = |h: &Result<Option<Hit<f32>>, QueryError>| h.map(|h| h.map(|h| h.bit_key()));
-        let same =
-            nearest.iter().map(key).eq(nearest_bundled.iter().map(key)) && any == any_bundled;
-        if !same {
-            fail("bundle answers differ from single ones");
-        }
+    if only.is_empty()
+        && let Some(difference) = accel_core::check_bundle(&accel, &rays)
+    {
+        fail(format!(
+            "bundle answers differ from single ones: {difference}"
+        ));
     }
     let n = rays.len() as f64;
     println!(

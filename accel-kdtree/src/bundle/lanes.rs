@@ -79,30 +79,26 @@ pub(crate) fn cross<T: Real>(
             to_near: 0,
             to_far: 0,
         };
-        if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
-            cast::<_, LaneRays<f32>>(rays),
-            cast(delta),
-            cast(&s),
-            cast(t0),
-            cast(t1),
-            cast_mut::<_, Crossing<f32>>(&mut out),
-        ) {
-            // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-            unsafe { sse_f32::cross(r, axis & 3, d, s, a, b, o) };
-            return out;
+        // The SSE2 lanes of `$t` where `T` is `$t`.
+        macro_rules! sse {
+            ($t:ty, $module:ident) => {
+                if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
+                    cast::<_, LaneRays<$t>>(rays),
+                    cast(delta),
+                    cast(&s),
+                    cast(t0),
+                    cast(t1),
+                    cast_mut::<_, Crossing<$t>>(&mut out),
+                ) {
+                    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU
+                    // has it.
+                    unsafe { $module::cross(r, axis & 3, d, s, a, b, o) };
+                    return out;
+                }
+            };
         }
-        if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
-            cast::<_, LaneRays<f64>>(rays),
-            cast(delta),
-            cast(&s),
-            cast(t0),
-            cast(t1),
-            cast_mut::<_, Crossing<f64>>(&mut out),
-        ) {
-            // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-            unsafe { sse_f64::cross(r, axis & 3, d, s, a, b, o) };
-            return out;
-        }
+        sse!(f32, sse_f32);
+        sse!(f64, sse_f64);
     }
     cross_portable(rays, axis & 3, delta, s, t0, t1)
 }

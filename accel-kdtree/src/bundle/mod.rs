@@ -164,32 +164,45 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         rays: &[Ray<T>],
         out: &mut [Result<Option<Hit<T>>, QueryError>],
     ) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        let mut stack = Vec::with_capacity(STACK);
-        by_octant(rays, |group| match group {
-            Group::Packet(index) => {
-                let hits = self.nearest_packet(rays, index, &mut stack);
-                for (&i, hit) in index.iter().zip(hits) {
-                    out[i] = Ok(hit);
-                }
-            }
-            Group::Single(i) => out[i] = self.nearest(&rays[i], &mut ()),
-        });
+        self.by_packets(
+            rays,
+            out,
+            |index, stack| self.nearest_packet(rays, index, stack),
+            |ray| self.nearest(ray, &mut ()),
+        );
     }
 
     /// [`accel_core::Accelerator::occluded_bundle`], as
     /// [`KdTree::nearest_bundle`].
     pub(crate) fn any_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        self.by_packets(
+            rays,
+            out,
+            |index, stack| self.any_packet(rays, index, stack),
+            |ray| self.any(ray, &mut ()),
+        );
+    }
+
+    /// Answers a bundle: `out[i]` for the ray `rays[i]`, by `packet` for the
+    /// packets of [`by_octant`] (with a stack their walks share), by `single`
+    /// for the rays that go alone.
+    #[inline(always)]
+    fn by_packets<A>(
+        &self,
+        rays: &[Ray<T>],
+        out: &mut [Result<A, QueryError>],
+        packet: impl Fn(&[usize], &mut Vec<Entry<T>>) -> [A; PACKET],
+        single: impl Fn(&Ray<T>) -> Result<A, QueryError>,
+    ) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
         let mut stack = Vec::with_capacity(STACK);
         by_octant(rays, |group| match group {
             Group::Packet(index) => {
-                let found = self.any_packet(rays, index, &mut stack);
-                for (&i, found) in index.iter().zip(found) {
-                    out[i] = Ok(found);
+                for (&i, answer) in index.iter().zip(packet(index, &mut stack)) {
+                    out[i] = Ok(answer);
                 }
             }
-            Group::Single(i) => out[i] = self.any(&rays[i], &mut ()),
+            Group::Single(i) => out[i] = single(&rays[i]),
         });
     }
 
