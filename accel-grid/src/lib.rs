@@ -71,7 +71,7 @@
 
 pub mod blocks;
 pub mod build;
-mod bundle;
+pub mod bundle;
 pub mod cells;
 pub mod csr;
 pub mod dda;

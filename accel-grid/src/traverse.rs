@@ -1,6 +1,6 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
-use crate::bundle::{Answer, HEADING_COS, MIN_PACKET, PACKET};
+use crate::bundle::{Answer, runs};
 use crate::dda::{BeamWalk, Step};
 use crate::grid::{Grid, GridPart};
 use accel_core::packed::for_each_candidate;
@@ -222,6 +222,18 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
         }))
     }
 
+    /// Whether bundle queries go by packets ([`crate::bundle`]): on a grid
+    /// of one part that keeps empty-space blocks (at least half its blocks
+    /// empty), where a packet's slices are mostly empty. A grid of several
+    /// parts, or one whose cells are mostly full (the 100k random soup:
+    /// packets 0.6× as fast as single rays, each ray's rectangle being
+    /// computed in every slice), answers one ray at a time, with the same
+    /// answers.
+    #[must_use]
+    pub fn bundles_by_packets(&self) -> bool {
+        !self.empty && self.rest.is_empty() && self.first.blocks.is_some()
+    }
+
     /// Answers a bundle, `answer(i, …)` for each ray `rays[i]`: its nearest
     /// hit, or (if `ANY`) whether it hits anything. By packets
     /// ([`crate::bundle`]) on a grid of one part with empty-space blocks,
@@ -238,23 +250,21 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
                 self.nearest(ray, &mut ()).map(Answer::Nearest)
             }
         };
-        if self.empty || !self.rest.is_empty() || self.first.blocks.is_none() {
+        if !self.bundles_by_packets() {
             for (i, ray) in rays.iter().enumerate() {
                 answer(i, single(ray));
             }
             return;
         }
-        for (c, chunk) in rays.chunks(PACKET).enumerate() {
-            // Rays heading every way (diffuse bounces) cannot make a packet:
-            // one at a time, without the packet's set-up.
-            if chunk[0].count_heading_with(chunk, HEADING_COS) < MIN_PACKET {
-                for (i, ray) in chunk.iter().enumerate() {
-                    answer(c * PACKET + i, single(ray));
+        for (base, run, together) in runs(rays) {
+            if together {
+                self.first
+                    .packet::<ANY, P>(self.primitives(), run, |i, a| answer(base + i, a));
+            } else {
+                for (i, ray) in run.iter().enumerate() {
+                    answer(base + i, single(ray));
                 }
-                continue;
             }
-            self.first
-                .packet::<ANY, P>(self.primitives(), chunk, |i, a| answer(c * PACKET + i, a));
         }
     }
 
@@ -293,12 +303,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     accel_core::ray_queries_from_walks!();
 
     /// Packets of up to [`crate::bundle::PACKET`] rays walked together
-    /// slice by slice ([`crate::bundle`]) where that pays: on a grid with
-    /// empty-space blocks (at least half its blocks empty), where a
-    /// packet's slices are mostly empty. A grid of several parts, or one
-    /// whose cells are mostly full (the 100k random soup: packets 0.6× as
-    /// fast as single rays, each ray's rectangle being computed in every
-    /// slice), answers one ray at a time.
+    /// slice by slice ([`crate::bundle`]) where that pays
+    /// ([`Grid::bundles_by_packets`]); elsewhere one ray at a time.
     fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
         self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));

@@ -69,6 +69,7 @@
 //! crate docs, "Embedding"; `accel-kdtree/examples/embedded.rs`).
 
 mod build;
+mod bundle;
 mod node;
 mod octree;
 mod params;

@@ -23,6 +23,7 @@ use accel_core::{
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalRay, nearer, region_matches,
     region_search_box, validate_region,
 };
+use accel_grid::bundle::Answer;
 use accel_grid::dda::BeamWalk;
 use core::borrow::Borrow;
 
@@ -165,11 +166,17 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
             false
         });
         if let Some(child) = child {
-            let child = &tree.nodes[child];
-            let beam = narrowed(tr, child, self.q.inv_max_d);
-            if let Some(from) = child_start(&beam, child, self.limit(&beam)) {
-                self.walk(child, &beam, from);
-            }
+            self.descend(&tree.nodes[child], tr);
+        }
+    }
+
+    /// Walks the child grid `child` of a cell on the beam `tr`, narrowed
+    /// to it, from the beam's entry into its box.
+    #[inline]
+    fn descend(&mut self, child: &Node<T>, tr: &TraversalRay<T>) {
+        let beam = narrowed(tr, child, self.q.inv_max_d);
+        if let Some(from) = child_start(&beam, child, self.limit(&beam)) {
+            self.walk(child, &beam, from);
         }
     }
 }
@@ -227,11 +234,15 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
         }) {
             return true;
         }
-        child.is_some_and(|child| {
-            let child = &tree.nodes[child];
-            let beam = narrowed(tr, child, self.q.inv_max_d);
-            child_start(&beam, child, beam.t_end).is_some_and(|from| self.walk(child, &beam, from))
-        })
+        child.is_some_and(|child| self.descend(&tree.nodes[child], tr))
+    }
+
+    /// Whether anything in the child grid `child` of a cell is hit, on the
+    /// beam `tr` narrowed to it.
+    #[inline]
+    fn descend(&mut self, child: &Node<T>, tr: &TraversalRay<T>) -> bool {
+        let beam = narrowed(tr, child, self.q.inv_max_d);
+        child_start(&beam, child, beam.t_end).is_some_and(|from| self.walk(child, &beam, from))
     }
 }
 
@@ -241,7 +252,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
     /// best hit of the earlier. A tree of one part, nearly every tree, takes
     /// a path of its own without the loop; neither prepares anything for a
     /// ray that misses it.
-    fn nearest<C: CostCounter>(
+    pub(crate) fn nearest<C: CostCounter>(
         &self,
         ray: &Ray<T>,
         counter: &mut C,
@@ -255,9 +266,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
             let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
                 return Ok(None);
             };
-            let mut q = Nearest::new(self, tr.prepared, counter);
-            q.walk(root, &tr, tr.t_start);
-            return Ok(q.best);
+            return Ok(self.nearest_from_root(&tr, counter));
         }
         // The ray is prepared (its shear takes three divisions) only once
         // a part's box is met: a ray that misses every part prepares nothing.
@@ -277,7 +286,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
 
     /// Whether anything is hit, counting the work in `counter`, part by part
     /// (a one-part tree as in [`Octree::nearest`]).
-    fn any<C: CostCounter>(&self, ray: &Ray<T>, counter: &mut C) -> Result<bool, QueryError> {
+    pub(crate) fn any<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        counter: &mut C,
+    ) -> Result<bool, QueryError> {
         ray.validate()?;
         if self.empty {
             return Ok(false);
@@ -287,7 +300,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
             let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
                 return Ok(false);
             };
-            return Ok(Any::new(self, tr.prepared, counter).walk(root, &tr, tr.t_start));
+            return Ok(self.any_from_root(&tr, counter));
         }
         // Prepared only once a part's box is met, as in `nearest`.
         let roots = &self.nodes[..self.parts];
@@ -300,6 +313,66 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
                 self.part_beam(ray, root)
                     .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
             }))
+    }
+
+    /// The nearest hit of a tree of one part, on the beam `tr` through its
+    /// root's box.
+    #[inline]
+    pub(crate) fn nearest_from_root<C: CostCounter>(
+        &self,
+        tr: &TraversalRay<T>,
+        counter: &mut C,
+    ) -> Option<Hit<T>> {
+        let mut q = Nearest::new(self, tr.prepared, counter);
+        q.walk(&self.nodes[0], tr, tr.t_start);
+        q.best
+    }
+
+    /// Whether anything of a tree of one part is hit, on the beam `tr`
+    /// through its root's box.
+    #[inline]
+    pub(crate) fn any_from_root<C: CostCounter>(
+        &self,
+        tr: &TraversalRay<T>,
+        counter: &mut C,
+    ) -> bool {
+        Any::new(self, tr.prepared, counter).walk(&self.nodes[0], tr, tr.t_start)
+    }
+
+    /// One ray of a packet ([`crate::bundle`]) walking the child grid
+    /// `child` alone, as its single walk does from the cell that links it:
+    /// on its beam `tr` through the root, with its best hit so far and its
+    /// mailbox (both updated).
+    pub(crate) fn nearest_below(
+        &self,
+        child: &Node<T>,
+        tr: &TraversalRay<T>,
+        best: &mut Option<Hit<T>>,
+        mailbox: &mut Mailbox,
+    ) {
+        let mut uncounted = ();
+        let mut q = Nearest::new(self, tr.prepared, &mut uncounted);
+        q.best = *best;
+        core::mem::swap(&mut q.q.mailbox, mailbox);
+        q.descend(child, tr);
+        core::mem::swap(&mut q.q.mailbox, mailbox);
+        *best = q.best;
+    }
+
+    /// As [`Octree::nearest_below`], for an any-hit query: whether anything
+    /// below is hit.
+    pub(crate) fn any_below(
+        &self,
+        child: &Node<T>,
+        tr: &TraversalRay<T>,
+        mailbox: &mut Mailbox,
+    ) -> bool {
+        let mut uncounted = ();
+        let mut q = Any::new(self, tr.prepared, &mut uncounted);
+        core::mem::swap(&mut q.q.mailbox, mailbox);
+        let found = q.descend(child, tr);
+        core::mem::swap(&mut q.q.mailbox, mailbox);
+        found
     }
 
     /// The first part whose box the ray's beam meets, by its index among
@@ -347,6 +420,22 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     }
 
     accel_core::ray_queries_from_walks!();
+
+    /// Packets of up to [`accel_grid::bundle::PACKET`] rays walked
+    /// together slice by slice through the nested grids
+    /// ([`crate::bundle`]), on a tree of one part; a tree in parts answers
+    /// one ray at a time.
+    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));
+    }
+
+    /// As [`Accelerator::intersect_bundle`], stopping each ray at its first
+    /// hit.
+    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
+        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+        self.by_packets::<true>(rays, |i, a| out[i] = a.map(Answer::hits));
+    }
 
     /// Gathers the references of every leaf near the region (grown by a
     /// rounding allowance, so that a primitive the exact test accepts is never

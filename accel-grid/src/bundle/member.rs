@@ -1,0 +1,216 @@
+//! A packet's rays: each one's walk state and beam footprint, and the
+//! rectangles that hold all their beams in a slab.
+
+use crate::cells::GridGeometry;
+use accel_core::{Hit, Mailbox, Real, TraversalRay};
+
+use super::COHERENT_CELLS;
+
+/// A ray of a packet and its walk's state.
+pub(super) struct Member<T: Real> {
+    /// Its index in the bundle.
+    pub(super) slot: usize,
+    pub(super) tr: TraversalRay<T>,
+    /// What the beam's rectangles are widened by: the beam's half-width plus
+    /// `gamma(16)` of the largest coordinate magnitude the ray reaches in
+    /// its interval, which covers the few roundings of each parameter and
+    /// coordinate computed from it.
+    pub(super) pad: T,
+    pub(super) best: Option<Hit<T>>,
+    /// Slices entered after this parameter are not needed.
+    pub(super) limit: T,
+    pub(super) mailbox: Mailbox,
+    /// Its line across the main axis on each cross axis, intercept and
+    /// slope ([`Lines`]); set once the packet's axes are known.
+    pub(super) line: [[T; 2]; 2],
+    /// The largest magnitude of its origin's coordinates.
+    o_mag: T,
+}
+
+/// Where a member's beam lies while it is in a slab of the main axis.
+pub(super) enum Footprint<T> {
+    /// The beam reaches the slab only later (its interval starts beyond it).
+    NotYet,
+    /// The beam enters the slab after its limit: the ray is finished there.
+    Past,
+    /// Lowest and highest coordinate on the two cross axes, widened.
+    Within([T; 4]),
+}
+
+impl<T: Real> Member<T> {
+    pub(super) fn new(slot: usize, tr: TraversalRay<T>) -> Self {
+        let r = tr.ray();
+        let o = r.origin.abs().max_component();
+        let d = r.direction.abs().max_component();
+        let t = if tr.t_start.abs() > tr.t_end.abs() {
+            tr.t_start.abs()
+        } else {
+            tr.t_end.abs()
+        };
+        let pad = tr.delta + T::gamma(16) * (o + d * t);
+        Self {
+            slot,
+            limit: tr.t_end,
+            tr,
+            pad,
+            best: None,
+            mailbox: Mailbox::new(),
+            line: [[T::ZERO; 2]; 2],
+            o_mag: o,
+        }
+    }
+
+    /// Sets its lines across main axis `k` on the cross axes `u`, `v`.
+    pub(super) fn set_axes(&mut self, [k, u, v]: [usize; 3]) {
+        let r = self.tr.ray();
+        let inv = self.tr.prepared.inv_dir[k];
+        self.line = [u, v].map(|a| {
+            let slope = r.direction[a] * inv;
+            [r.origin[a] - r.origin[k] * slope, slope]
+        });
+    }
+
+    /// The beam's rectangle on axes `u`, `v` while its `k` extent meets the
+    /// slab `[x_lo, x_hi]`, over the ray's interval up to its limit.
+    #[inline]
+    pub(super) fn footprint(&self, [k, u, v]: [usize; 3], x_lo: T, x_hi: T) -> Footprint<T> {
+        let r = self.tr.ray();
+        let (o, d, inv) = (r.origin, r.direction, self.tr.prepared.inv_dir[k]);
+        let ta = ((x_lo - self.pad) - o[k]) * inv;
+        let tb = ((x_hi + self.pad) - o[k]) * inv;
+        let (enter, leave) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        if enter > self.limit {
+            return Footprint::Past;
+        }
+        if leave < self.tr.t_start {
+            return Footprint::NotYet;
+        }
+        let t0 = if enter > self.tr.t_start {
+            enter
+        } else {
+            self.tr.t_start
+        };
+        let t1 = if leave < self.limit {
+            leave
+        } else {
+            self.limit
+        };
+        let span = |a: usize| {
+            let (p, q) = (o[a] + d[a] * t0, o[a] + d[a] * t1);
+            let (lo, hi) = if p <= q { (p, q) } else { (q, p) };
+            (lo - self.pad, hi + self.pad)
+        };
+        let ((u0, u1), (v0, v1)) = (span(u), span(v));
+        Footprint::Within([u0, u1, v0, v1])
+    }
+}
+
+/// The indices of the set bits of `mask`, lowest first.
+#[inline]
+pub(super) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
+    core::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
+}
+
+/// Some members' lines across the main axis `k`, `x_a = c + m·x_k` on each
+/// cross axis `a`, as intervals of intercepts and slopes: a rectangle
+/// holding every such member's beam in a slab, in a few operations however
+/// many rays the packet has (rays starting or stopping inside the slab are
+/// covered as if they went on; the per-ray rectangles cull).
+pub(super) struct Lines<T> {
+    /// Per cross axis, lowest and highest intercept.
+    c: [[T; 2]; 2],
+    /// Per cross axis, lowest and highest slope.
+    m: [[T; 2]; 2],
+    /// The widest member's pad.
+    pad: T,
+    /// Largest origin coordinate, intercept and slope magnitudes, for the
+    /// rounding allowance.
+    o_mag: T,
+    c_mag: T,
+    m_mag: T,
+}
+
+impl<T: Real> Lines<T> {
+    /// The lines of the members of `live` (a bit per member), `None` when
+    /// there is none.
+    pub(super) fn of(members: &[Member<T>], live: u64) -> Option<Self> {
+        let mut lines: Option<Self> = None;
+        for m in bits(live).map(|i| &members[i]) {
+            let [[cu, mu], [cv, mv]] = m.line;
+            let l = lines.get_or_insert(Self {
+                c: [[cu, cu], [cv, cv]],
+                m: [[mu, mu], [mv, mv]],
+                pad: m.pad,
+                o_mag: m.o_mag,
+                c_mag: T::ZERO,
+                m_mag: T::ZERO,
+            });
+            for (j, [c, s]) in m.line.into_iter().enumerate() {
+                l.c[j] = [l.c[j][0].min(c), l.c[j][1].max(c)];
+                l.m[j] = [l.m[j][0].min(s), l.m[j][1].max(s)];
+                l.c_mag = l.c_mag.max(c.abs());
+                l.m_mag = l.m_mag.max(s.abs());
+            }
+            l.pad = l.pad.max(m.pad);
+            l.o_mag = l.o_mag.max(m.o_mag);
+        }
+        lines
+    }
+
+    /// A rectangle holding every member's beam while it meets the slab
+    /// `[x_lo, x_hi]`: the lines over the slab widened by the pad, with
+    /// `gamma(16)` of the magnitudes for the roundings of the slopes,
+    /// intercepts and this evaluation.
+    pub(super) fn hull(&self, x_lo: T, x_hi: T) -> [T; 4] {
+        let (x0, x1) = (x_lo - self.pad, x_hi + self.pad);
+        let x_mag = x0.abs().max(x1.abs());
+        let err = self.pad
+            + T::gamma(16)
+                * (self.o_mag + self.c_mag + self.m_mag * (x_mag + self.o_mag + self.o_mag));
+        let mut out = [T::ZERO; 4];
+        for j in 0..2 {
+            let [m0, m1] = self.m[j];
+            let ends = [m0 * x0, m0 * x1, m1 * x0, m1 * x1];
+            let lo = ends.iter().fold(T::INFINITY, |a, &b| a.min(b));
+            let hi = ends.iter().fold(T::NEG_INFINITY, |a, &b| a.max(b));
+            out[2 * j] = (self.c[j][0] + lo) - err;
+            out[2 * j + 1] = (self.c[j][1] + hi) + err;
+        }
+        out
+    }
+}
+
+/// Whether the members' rays stay within [`COHERENT_CELLS`] cells of each
+/// other across the grid: on each cross axis, the spread of their lines
+/// where they enter and where they leave the grid's depth along `axes[0]`,
+/// in cells. A tile of camera rays does, diffuse rays leaving a surface do
+/// not, and walking those together would open most of every slice for each
+/// of them. (A choice of speed only: any packet is answered exactly.)
+pub(super) fn coherent<T: Real>(
+    members: &[Member<T>],
+    geom: &GridGeometry<T>,
+    [k, u, v]: [usize; 3],
+) -> bool {
+    let b = geom.bounds();
+    let n = geom.resolution();
+    let cell = |a: usize| (b.max[a] - b.min[a]) / T::from_usize(n[a] as usize);
+    let limits = [u, v].map(|a| cell(a) * T::from_f64(COHERENT_CELLS));
+    [b.min[k], b.max[k]].iter().all(|&x| {
+        let mut span = [[T::INFINITY, T::NEG_INFINITY]; 2];
+        for m in members {
+            let r = m.tr.ray();
+            let t = (x - r.origin[k]) * m.tr.prepared.inv_dir[k];
+            for (j, &a) in [u, v].iter().enumerate() {
+                let p = r.origin[a] + r.direction[a] * t;
+                span[j] = [span[j][0].min(p), span[j][1].max(p)];
+            }
+        }
+        (0..2).all(|j| span[j][1] - span[j][0] <= limits[j])
+    })
+}

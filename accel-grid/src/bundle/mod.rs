@@ -1,0 +1,580 @@
+//! Bundles: rays walked together, slice by slice of cells (the coherent grid
+//! traversal of Wald, Ize, Kensler, Knoll & Parker 2006, "Ray tracing
+//! animated scenes using coherent grid traversal"), on a uniform grid or on
+//! a grid whose cells are refined by nested grids (the octree).
+//!
+//! A [`Packet`] of up to [`PACKET`] rays whose directions share the sign of
+//! one main axis `k`, and whose `k` components are the larger part of them,
+//! walks a grid's slices of cells across `k` in the rays' order. In each
+//! slice every ray's beam ([`TraversalRay`]) covers a rectangle of the two
+//! other coordinates; their union says which cells of the slice to open,
+//! and a cell is handed to its grid ([`SliceCells::visit`]) with the rays
+//! whose rectangles meet it. The grid tests its primitives against each of
+//! them ([`Packet::test`], with the ray's own mailbox and best hit) and, if
+//! a nested grid refines the cell, walks that grid with those rays alone:
+//! slice by slice ([`Packet::walk`]) or one ray at a time with each ray's
+//! state ([`Packet::each_alone`]). Where a grid keeps empty-space
+//! blocks ([`crate::blocks`]), a slab of slices whose blocks under the union
+//! are all empty is passed over at once.
+//!
+//! Why each ray's answer is its single-ray answer, bit for bit: a ray is
+//! followed, slice by slice, until the parameter at which its beam enters
+//! the next slice passes its best hit by the hit tolerance `t_tol` (its
+//! single walk's limit), and within a slice its rectangle holds its beam
+//! over that stretch, widened by a pad for the rounding of
+//! the parameters and coordinates computed here. So every cell, at every
+//! level, that the single walk opens before it stops is opened for the ray
+//! here (the single walk of a nested grid narrows the beam and the
+//! tolerance; the packet keeps the wider ones, which open more), and the
+//! ray is tested against every primitive the single walk tests (and
+//! perhaps a few more). Each test is exact, and the nearest of them is the
+//! smallest `t`, ties to the lowest index, in whatever order they come: the
+//! single walk's answer. Rays that do not suit the packet (another main
+//! axis or sign, a tiny main component) take the single walk.
+
+mod member;
+mod part;
+#[cfg(test)]
+mod tests;
+
+use crate::blocks::Blocks;
+use crate::cells::GridGeometry;
+use accel_core::packed::{PackedTriangles, for_each_candidate};
+use accel_core::{Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real, TraversalRay, nearer};
+use member::{Footprint, Lines, Member, bits, coherent};
+
+/// Rays walked together at most; larger bundles are cut into packets.
+pub const PACKET: usize = 64;
+
+/// Fewer rays than this (of a packet, once those going another way are
+/// left to the single walk) are not walked together: the slice walk's
+/// fixed costs need company to pay.
+pub const MIN_PACKET: usize = 16;
+
+/// The cosine of the widest angle between a bundle's first ray and the
+/// others that still lets the bundle be walked by packets: unless
+/// [`MIN_PACKET`] of its rays head within about 26° of the first, every ray
+/// takes the single walk at once (diffuse rays in bundles ran 2–9% slower
+/// than single rays when each packet was set up before being given up).
+pub const HEADING_COS: f64 = 0.9;
+
+/// Slices where full cells under the hull times members exceed this mark
+/// each member's cells from its rectangle's cell range
+/// ([`Packet::spread`]); the others compare each member with each full
+/// cell ([`Packet::cull`]).
+const SPREAD_PAIRS: usize = 1024;
+
+/// How far apart (in cells of the first grid walked) a packet's beams may
+/// spread and still be walked together.
+pub const COHERENT_CELLS: f64 = 8.0;
+
+/// A bundle cut into runs of up to [`PACKET`] rays: each run's first index
+/// in the bundle, its rays, and whether enough of them ([`MIN_PACKET`])
+/// head within the angle of [`HEADING_COS`] of its first ray to try a
+/// packet (rays heading every way, diffuse bounces, cannot make one and
+/// should go one at a time without a packet's set-up).
+pub fn runs<T: Real>(rays: &[Ray<T>]) -> impl Iterator<Item = (usize, &[Ray<T>], bool)> {
+    rays.chunks(PACKET).enumerate().map(|(c, run)| {
+        let together = run[0].count_heading_with(run, HEADING_COS) >= MIN_PACKET;
+        (c * PACKET, run, together)
+    })
+}
+
+/// One ray's answer: its nearest hit, or whether it hits anything.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Answer<T> {
+    /// A nearest-hit query's answer.
+    Nearest(Option<Hit<T>>),
+    /// An any-hit query's answer.
+    Any(bool),
+}
+
+impl<T> Answer<T> {
+    /// The answer to a query for the nearest hit (`ANY` false) or for any
+    /// hit of a ray that hits nothing.
+    #[must_use]
+    pub fn nothing<const ANY: bool>() -> Self {
+        if ANY {
+            Self::Any(false)
+        } else {
+            Self::Nearest(None)
+        }
+    }
+
+    /// The nearest hit of a nearest-hit query's answer.
+    ///
+    /// # Panics
+    /// For an any-hit query's answer (a bug of the caller).
+    #[must_use]
+    pub fn into_hit(self) -> Option<Hit<T>> {
+        match self {
+            Self::Nearest(h) => h,
+            Self::Any(_) => unreachable!("a nearest-hit query answers with its hit"),
+        }
+    }
+
+    /// Whether the ray hits anything.
+    #[must_use]
+    pub fn hits(self) -> bool {
+        match self {
+            Self::Nearest(h) => h.is_some(),
+            Self::Any(b) => b,
+        }
+    }
+}
+
+/// A grid as a packet's slice walk sees it: its geometry, its empty-space
+/// blocks, which cells hold something, and what opening a cell does.
+pub trait SliceCells<T: Real> {
+    /// The grid's box, resolution and boundaries.
+    fn geometry(&self) -> &GridGeometry<T>;
+
+    /// Its empty-space blocks, if it keeps them.
+    fn blocks(&self) -> Option<&Blocks<T>>;
+
+    /// Whether the cell of linear index `cell` holds anything (primitives or
+    /// a nested grid).
+    fn holds(&self, cell: usize) -> bool;
+
+    /// Opens the cell of linear index `cell` for the members of `meeting`
+    /// (a bit per member of `packet`): tests what it holds against them
+    /// ([`Packet::test`]) and walks the grid that refines it, if any
+    /// ([`Packet::walk`]).
+    fn visit(&self, packet: &mut Packet<T>, cell: usize, meeting: u64);
+}
+
+/// The scratch space of one grid's slice walk: the cells of a slice under
+/// the packet's hull that hold something, and per cell of that window the
+/// members whose rectangles meet it.
+#[derive(Default)]
+struct Scratch {
+    /// Each full cell's linear index, place in the window, and cross-axis
+    /// coordinates.
+    cells: Vec<(usize, usize, [u32; 2])>,
+    /// A bit per member, per cell of the window (row by row).
+    meeting: Vec<u64>,
+}
+
+/// The cells of a slice under a hull: lowest and highest cell on each cross
+/// axis.
+#[derive(Clone, Copy)]
+struct Window {
+    u: [u32; 2],
+    v: [u32; 2],
+}
+
+impl Window {
+    /// The window of cells of `geom` under `hull` on the cross axes `u`, `v`.
+    fn under<T: Real>(geom: &GridGeometry<T>, [_, u, v]: [usize; 3], hull: &[T; 4]) -> Self {
+        Self {
+            u: [geom.axis_cell(u, hull[0]), geom.axis_cell(u, hull[1])],
+            v: [geom.axis_cell(v, hull[2]), geom.axis_cell(v, hull[3])],
+        }
+    }
+
+    /// Cells per row.
+    fn width(&self) -> usize {
+        (self.u[1] - self.u[0]) as usize + 1
+    }
+
+    /// How many cells it holds.
+    fn len(&self) -> usize {
+        self.width() * ((self.v[1] - self.v[0]) as usize + 1)
+    }
+}
+
+/// Rays walked together (see the module docs), each with its own interval,
+/// mailbox and best hit.
+pub struct Packet<T: Real> {
+    members: Vec<Member<T>>,
+    /// The main axis, then the two cross axes.
+    axes: [usize; 3],
+    /// Whether the rays go up the main axis.
+    up: bool,
+    /// A bit per member that needs nothing more (an any-hit query's hit).
+    finished: u64,
+    /// Scratch space, one per grid being walked (nested walks stack up).
+    scratch: Vec<Scratch>,
+}
+
+/// What becomes of a ray a packet does not take.
+pub enum Alone<T: Real> {
+    /// The ray is invalid.
+    Refused(QueryError),
+    /// Its beam misses the grid: nothing is hit.
+    Misses,
+    /// It goes another way than the packet: it takes the single walk on
+    /// this beam.
+    Single(TraversalRay<T>),
+}
+
+impl<T: Real> Packet<T> {
+    /// A packet of the rays (at most [`PACKET`]) whose beams meet `bounds`
+    /// and go the way most of them go; every other ray is handed to `alone`
+    /// with its index. `None` when no ray is left.
+    pub fn form(
+        rays: &[Ray<T>],
+        bounds: &accel_core::Aabb<T>,
+        mut alone: impl FnMut(usize, Alone<T>),
+    ) -> Option<Self> {
+        debug_assert!(rays.len() <= PACKET);
+        let mut members: Vec<Member<T>> = Vec::with_capacity(rays.len());
+        let mut weight = [T::ZERO; 3];
+        for (slot, ray) in rays.iter().enumerate() {
+            if let Err(e) = ray.validate() {
+                alone(slot, Alone::Refused(e));
+                continue;
+            }
+            match TraversalRay::new(ray, bounds) {
+                Some(tr) => {
+                    for (a, w) in weight.iter_mut().enumerate() {
+                        *w += ray.direction[a];
+                    }
+                    members.push(Member::new(slot, tr));
+                }
+                None => alone(slot, Alone::Misses),
+            }
+        }
+        let k = (0..3)
+            .max_by(|&a, &b| {
+                weight[a]
+                    .abs()
+                    .partial_cmp(&weight[b].abs())
+                    .unwrap_or(core::cmp::Ordering::Equal)
+            })
+            .unwrap_or(0);
+        let up = weight[k] >= T::ZERO;
+        members.retain(|m| {
+            let d = m.tr.ray().direction;
+            let along = if up { d[k] } else { -d[k] };
+            let suits = along > T::ZERO
+                && m.tr.prepared.inv_dir[k].is_finite()
+                && along + along >= d.abs().max_component();
+            if !suits {
+                alone(m.slot, Alone::Single(m.tr));
+            }
+            suits
+        });
+        let axes = [k, (k + 1) % 3, (k + 2) % 3];
+        for m in &mut members {
+            m.set_axes(axes);
+        }
+        (!members.is_empty()).then(|| Self {
+            members,
+            axes,
+            up,
+            finished: 0,
+            scratch: Vec::new(),
+        })
+    }
+
+    /// Answers a packet of `rays` (at most [`PACKET`]) on the grid `root`,
+    /// as the single walk (`single`, on a ray's beam through `root`'s box)
+    /// answers each: `answer(i, …)` is called once for each ray `rays[i]`,
+    /// with its nearest hit, or (if `ANY`) whether it hits anything, or the
+    /// error that refuses it. Packets of fewer than [`MIN_PACKET`] rays,
+    /// or whose rays spread over more than [`COHERENT_CELLS`] cells of
+    /// `root`, go one ray at a time.
+    pub fn answer<const ANY: bool, G: SliceCells<T> + ?Sized>(
+        root: &G,
+        rays: &[Ray<T>],
+        single: impl Fn(&TraversalRay<T>) -> Answer<T>,
+        mut answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
+    ) {
+        let formed = Self::form(rays, root.geometry().bounds(), |slot, alone| {
+            answer(
+                slot,
+                match alone {
+                    Alone::Refused(e) => Err(e),
+                    Alone::Misses => Ok(Answer::nothing::<ANY>()),
+                    Alone::Single(tr) => Ok(single(&tr)),
+                },
+            );
+        });
+        let Some(mut packet) = formed else {
+            return;
+        };
+        if packet.members.len() < MIN_PACKET
+            || !coherent(&packet.members, root.geometry(), packet.axes)
+        {
+            for m in &packet.members {
+                answer(m.slot, Ok(single(&m.tr)));
+            }
+            return;
+        }
+        packet.walk(root, u64::MAX >> (64 - packet.members.len()));
+        for (i, m) in packet.members.iter().enumerate() {
+            answer(
+                m.slot,
+                Ok(if ANY {
+                    Answer::Any(packet.finished & (1 << i) != 0)
+                } else {
+                    Answer::Nearest(m.best)
+                }),
+            );
+        }
+    }
+
+    /// Walks the slices of `grid` with the members of `mask` (a bit per
+    /// member), in the rays' order, opening each cell that holds something
+    /// under their beams ([`SliceCells::visit`]) until every one of them
+    /// has passed its limit or finished.
+    pub fn walk<G: SliceCells<T> + ?Sized>(&mut self, grid: &G, mask: u64) {
+        let axes = self.axes;
+        let k = axes[0];
+        let mut live = mask & !self.finished;
+        let Some(mut lines) = Lines::of(&self.members, live) else {
+            return;
+        };
+        let mut lines_of = live;
+        let geom = grid.geometry();
+        let n = geom.resolution()[k];
+        let xs = geom.boundaries(k);
+        // The slices the members' beams reach, in the order they go.
+        let (mut x_min, mut x_max) = (T::INFINITY, T::NEG_INFINITY);
+        for m in bits(live).map(|i| &self.members[i]) {
+            let r = m.tr.ray();
+            for t in [m.tr.t_start, m.limit] {
+                let x = r.origin[k] + r.direction[k] * t;
+                x_min = x_min.min(x - m.pad);
+                x_max = x_max.max(x + m.pad);
+            }
+        }
+        let (first, last) = (geom.axis_cell(k, x_min), geom.axis_cell(k, x_max));
+        let (shift, blocks) = match grid.blocks() {
+            Some(b) => (b.shift(), Some(b)),
+            None => (0, None),
+        };
+        let mut scratch = self.scratch.pop().unwrap_or_default();
+        let (slab_first, slab_last) = (first >> shift, last >> shift);
+        'slabs: for step in 0..=(slab_last - slab_first) {
+            let slab = if self.up {
+                slab_first + step
+            } else {
+                slab_last - step
+            };
+            if let Some(blocks) = blocks {
+                let bx = blocks.geometry().boundaries(k);
+                let hull = lines.hull(bx[slab as usize], bx[slab as usize + 1]);
+                if !blocks.any_occupied_under(axes, slab, &hull) {
+                    continue;
+                }
+            }
+            let lo = (slab << shift).max(first);
+            let hi = (((slab + 1) << shift) - 1).min(last).min(n - 1);
+            for step in 0..=(hi - lo) {
+                let i = if self.up { lo + step } else { hi - step };
+                let (x_lo, x_hi) = (xs[i as usize], xs[i as usize + 1]);
+                let window = Window::under(geom, axes, &lines.hull(x_lo, x_hi));
+                full_cells(grid, axes, i, window, &mut scratch.cells);
+                if scratch.cells.is_empty() {
+                    continue;
+                }
+                let pairs = scratch.cells.len() * live.count_ones() as usize;
+                live = if pairs > SPREAD_PAIRS {
+                    self.spread(live, geom, x_lo, x_hi, window, &mut scratch.meeting)
+                } else {
+                    self.cull(live, geom, x_lo, x_hi, window, &mut scratch)
+                };
+                for &(cell, place, _) in &scratch.cells {
+                    let meeting = scratch.meeting[place] & !self.finished;
+                    if meeting != 0 {
+                        grid.visit(self, cell, meeting);
+                    }
+                }
+                live &= !self.finished;
+                if live != lines_of {
+                    lines_of = live;
+                    match Lines::of(&self.members, live) {
+                        Some(l) => lines = l,
+                        None => break 'slabs,
+                    }
+                }
+            }
+        }
+        self.scratch.push(scratch);
+    }
+
+    /// [`Packet::spread`] for a slice with few full cells (`scratch.cells`):
+    /// each member's rectangle is compared with each full cell's, and only
+    /// the full cells' places in `scratch.meeting` are set.
+    fn cull(
+        &self,
+        live: u64,
+        geom: &GridGeometry<T>,
+        x_lo: T,
+        x_hi: T,
+        window: Window,
+        scratch: &mut Scratch,
+    ) -> u64 {
+        let [_, u, v] = self.axes;
+        let (bu, bv) = (geom.boundaries(u), geom.boundaries(v));
+        scratch.meeting.resize(window.len(), 0);
+        for &(_, place, _) in &scratch.cells {
+            scratch.meeting[place] = 0;
+        }
+        let mut still = live;
+        for i in bits(live & !self.finished) {
+            let f = match self.members[i].footprint(self.axes, x_lo, x_hi) {
+                Footprint::Past => {
+                    still &= !(1 << i);
+                    continue;
+                }
+                Footprint::NotYet => continue,
+                Footprint::Within(f) => f,
+            };
+            for &(_, place, [cu, cv]) in &scratch.cells {
+                let (cu, cv) = (cu as usize, cv as usize);
+                if f[0] <= bu[cu + 1] && f[1] >= bu[cu] && f[2] <= bv[cv + 1] && f[3] >= bv[cv] {
+                    scratch.meeting[place] |= 1 << i;
+                }
+            }
+        }
+        still
+    }
+
+    /// Marks, per cell of `window` (in `meeting`), the members of `live`
+    /// whose rectangles in the slab `[x_lo, x_hi]` meet it: every cell
+    /// whose closed box meets the closed rectangle (a rectangle's edge on a
+    /// boundary meets the cells on both sides). Returns `live` without the
+    /// members past the slab.
+    fn spread(
+        &self,
+        live: u64,
+        geom: &GridGeometry<T>,
+        x_lo: T,
+        x_hi: T,
+        window: Window,
+        meeting: &mut Vec<u64>,
+    ) -> u64 {
+        let [_, u, v] = self.axes;
+        meeting.clear();
+        meeting.resize(window.len(), 0);
+        let width = window.width();
+        // The cells on `axis` the closed interval `[lo, hi]` meets, within
+        // `[first, last]`.
+        let span = |axis: usize, lo: T, hi: T, [first, last]: [u32; 2]| {
+            let mut a = geom.axis_cell(axis, lo);
+            if a > 0 && geom.boundaries(axis)[a as usize] == lo {
+                a -= 1;
+            }
+            (a.max(first), geom.axis_cell(axis, hi).min(last))
+        };
+        let mut still = live;
+        for i in bits(live & !self.finished) {
+            match self.members[i].footprint(self.axes, x_lo, x_hi) {
+                Footprint::Past => still &= !(1 << i),
+                Footprint::NotYet => {}
+                Footprint::Within(f) => {
+                    let (u0, u1) = span(u, f[0], f[1], window.u);
+                    let (v0, v1) = span(v, f[2], f[3], window.v);
+                    for cv in v0..=v1 {
+                        let row = (cv - window.v[0]) as usize * width;
+                        for cu in u0..=u1 {
+                            meeting[row + (cu - window.u[0]) as usize] |= 1 << i;
+                        }
+                    }
+                }
+            }
+        }
+        still
+    }
+
+    /// Hands each unfinished member of `meeting` alone to `walk`, with its
+    /// beam, its best hit and its mailbox, for a walk of its own below a
+    /// cell (a nested grid walked one ray at a time); `walk` returns
+    /// whether an any-hit query (`ANY`) is answered.
+    #[inline]
+    pub fn each_alone<const ANY: bool>(
+        &mut self,
+        meeting: u64,
+        mut walk: impl FnMut(&TraversalRay<T>, &mut Option<Hit<T>>, &mut Mailbox) -> bool,
+    ) {
+        for i in bits(meeting & !self.finished) {
+            let m = &mut self.members[i];
+            let found = walk(&m.tr, &mut m.best, &mut m.mailbox);
+            self.settle::<ANY>(i, found);
+        }
+    }
+
+    /// After member `i` was tested: finished if an any-hit query found a
+    /// hit, else its limit drawn in to its best hit plus the tolerance.
+    #[inline]
+    fn settle<const ANY: bool>(&mut self, i: usize, found: bool) {
+        let m = &mut self.members[i];
+        if ANY && found {
+            self.finished |= 1 << i;
+        } else if let Some(b) = m.best {
+            let reach = b.t + m.tr.t_tol;
+            if reach < m.limit {
+                m.limit = reach;
+            }
+        }
+    }
+
+    /// Tests the primitives `refs` of a cell (whose references start at
+    /// `start` in the cell lists that `packed` was built from) against each
+    /// unfinished member of `meeting`, as the single walk tests them.
+    #[inline]
+    pub fn test<const ANY: bool, P: PrimitiveSet<T> + ?Sized>(
+        &mut self,
+        meeting: u64,
+        prims: &P,
+        packed: Option<&PackedTriangles<T>>,
+        start: usize,
+        refs: &[u32],
+    ) {
+        if refs.is_empty() {
+            return;
+        }
+        for i in bits(meeting & !self.finished) {
+            let m = &mut self.members[i];
+            let ray_max = m.tr.ray().t_max;
+            let prepared = &m.tr.prepared;
+            let (mailbox, best) = (&mut m.mailbox, &mut m.best);
+            let found = for_each_candidate(packed, start, refs, prepared, |p| {
+                if mailbox.seen(p) {
+                    return false;
+                }
+                let t_max = if ANY {
+                    ray_max
+                } else {
+                    best.map_or(ray_max, |b| b.t)
+                };
+                match prims.intersect(p as usize, prepared, t_max) {
+                    Some(h) => {
+                        *best = nearer(*best, Hit::new(p, h));
+                        ANY
+                    }
+                    None => false,
+                }
+            });
+            self.settle::<ANY>(i, found);
+        }
+    }
+}
+
+/// The cells of slice `i` (across `axes[0]`) of `grid` in `window` that
+/// hold something, with their places in the window, in `cells`.
+fn full_cells<T: Real, G: SliceCells<T> + ?Sized>(
+    grid: &G,
+    [k, u, v]: [usize; 3],
+    i: u32,
+    window: Window,
+    cells: &mut Vec<(usize, usize, [u32; 2])>,
+) {
+    cells.clear();
+    let geom = grid.geometry();
+    let mut place = 0;
+    for cv in window.v[0]..=window.v[1] {
+        for cu in window.u[0]..=window.u[1] {
+            let mut c = [0u32; 3];
+            (c[k], c[u], c[v]) = (i, cu, cv);
+            let index = geom.linear_index(c);
+            if grid.holds(index) {
+                cells.push((index, place, [cu, cv]));
+            }
+            place += 1;
+        }
+    }
+}

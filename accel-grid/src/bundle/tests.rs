@@ -1,0 +1,65 @@
+//! The two ways a slice marks which members meet which full cells agree.
+
+use super::part::PartCells;
+use super::*;
+use crate::Grid;
+use accel_core::{TriangleMesh, Vec3};
+use accel_scenes::generated::{SplitMix64, random_soup};
+
+/// Fans of 64 rays through a dense soup: in every slice of the main axis,
+/// [`Packet::spread`] (cell ranges from each rectangle) marks exactly the
+/// members that [`Packet::cull`] (each rectangle against each full cell's
+/// closed box) marks, on every full cell, and both drop the same members
+/// past the slice. Either one decides the cells a ray is tested in, so a
+/// cell one of them left out would lose hits.
+#[test]
+fn spread_and_cull_mark_the_same_members() {
+    let mesh: TriangleMesh<f32> = random_soup(20_000, 7).cast().unwrap();
+    let grid = Grid::new(&mesh).unwrap();
+    let part = &grid.first;
+    let cells = PartCells::<f32, _, false> { part, prims: &mesh };
+    let geom = &part.geometry;
+    let mut rng = SplitMix64::new(11);
+    let (mut marked, mut slices) = (0usize, 0usize);
+    for _ in 0..24 {
+        let origin = Vec3::splat(0.5) + rng.unit_vector() * rng.range(0.3, 3.0);
+        let aim = Vec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - origin;
+        let spread = rng.range(0.002, 0.04);
+        let rays: Vec<Ray<f32>> = (0..64)
+            .map(|i| {
+                let (di, dj) = ((i % 8) as f64 - 3.5, (i / 8) as f64 - 3.5);
+                let d = aim + Vec3::new(spread * di, spread * dj, spread * (di + dj));
+                Ray::new(origin, d).unwrap().cast()
+            })
+            .collect();
+        let Some(packet) = Packet::form(&rays, geom.bounds(), |_, _| {}) else {
+            continue;
+        };
+        let all = u64::MAX >> (64 - packet.members.len());
+        let lines = Lines::of(&packet.members, all).unwrap();
+        let k = packet.axes[0];
+        let xs = geom.boundaries(k);
+        let mut scratch = Scratch::default();
+        let mut spread_marks = Vec::new();
+        for i in 0..geom.resolution()[k] {
+            let (x_lo, x_hi) = (xs[i as usize], xs[i as usize + 1]);
+            let window = Window::under(geom, packet.axes, &lines.hull(x_lo, x_hi));
+            full_cells(&cells, packet.axes, i, window, &mut scratch.cells);
+            let by_spread = packet.spread(all, geom, x_lo, x_hi, window, &mut spread_marks);
+            let by_cull = packet.cull(all, geom, x_lo, x_hi, window, &mut scratch);
+            assert_eq!(by_spread, by_cull, "members still live after slice {i}");
+            for &(cell, place, _) in &scratch.cells {
+                assert_eq!(
+                    spread_marks[place], scratch.meeting[place],
+                    "members marked on cell {cell} of slice {i}"
+                );
+                marked += scratch.meeting[place].count_ones() as usize;
+            }
+            slices += usize::from(!scratch.cells.is_empty());
+        }
+    }
+    assert!(
+        slices > 100 && marked > 10_000,
+        "{slices} slices, {marked} marks"
+    );
+}
