@@ -44,8 +44,15 @@
 //! ([`accel_core::bounds_survey`]), so dense scenes pay nothing for it.
 //! [`GridParams::parts`] `= false` gives the seed's single grid.
 //!
-//! The cell logic ([`cells`], [`dda`], [`csr`], [`resolution`]) is public: the
-//! octree of nested grids is built from it.
+//! **Bundles.** Coherent rays asked together (`intersect_bundle`,
+//! `occluded_bundle`) walk the grid in packets of up to 64, slice by slice
+//! of cells across their main axis (Wald et al. 2006, "Ray tracing animated
+//! scenes using coherent grid traversal"), each ray still answered bit for
+//! bit as alone ([`bundle`]).
+//!
+//! The cell logic ([`cells`], [`dda`], [`csr`], [`resolution`]) and the
+//! packets' slice walk ([`bundle`]) are public: the octree of nested grids
+//! is built from them.
 //!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};

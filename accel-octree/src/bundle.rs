@@ -70,7 +70,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, const ANY: bool> SliceC
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
-    /// Whether bundle queries go by packets ([`crate::bundle`]): on a tree
+    /// Whether bundle queries go by packets (the crate docs, "Bundles"): on a tree
     /// of one part, unless it is the seed's uniform grid alone (no nested
     /// grid) with fewer than two thirds of its cells empty, where rays pass
     /// few empty cells a packet could share and packets ran at 0.74× the

@@ -45,6 +45,10 @@
 //!   A scene in parts is walked part by part, the later ones with the best
 //!   hit of the earlier. Every query is bit-for-bit the answer of
 //!   [`BruteForce`](accel_core::BruteForce).
+//! - **Bundles**: packets of coherent rays walk the root grid slice by
+//!   slice with `accel-grid`'s packets (Wald et al. 2006), each ray walking
+//!   the nested grids below alone ([`Octree::bundles_by_packets`] says
+//!   where).
 //!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};

@@ -422,9 +422,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
     accel_core::ray_queries_from_walks!();
 
     /// Packets of up to [`accel_grid::bundle::PACKET`] rays walked
-    /// together slice by slice through the nested grids
-    /// ([`crate::bundle`]), on a tree of one part; a tree in parts answers
-    /// one ray at a time.
+    /// together slice by slice over the root grid, each ray alone below,
+    /// where that pays ([`Octree::bundles_by_packets`]); elsewhere one ray
+    /// at a time.
     fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
         self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));
