@@ -20,8 +20,9 @@ pub(super) struct Member<T: Real> {
     /// Slices entered after this parameter are not needed.
     pub(super) limit: T,
     pub(super) mailbox: Mailbox,
-    /// Its line across the main axis on each cross axis, intercept and
-    /// slope ([`Lines`]); set once the packet's axes are known.
+    /// Its line across the main axis on each cross axis, `x_a = c +
+    /// m·(x_k − pivot)`: `[c, m]` ([`Lines`]); set once the packet's axes
+    /// and pivot are known.
     pub(super) line: [[T; 2]; 2],
     /// The largest magnitude of its origin's coordinates.
     o_mag: T,
@@ -60,13 +61,15 @@ impl<T: Real> Member<T> {
         }
     }
 
-    /// Sets its lines across main axis `k` on the cross axes `u`, `v`.
-    pub(super) fn set_axes(&mut self, [k, u, v]: [usize; 3]) {
+    /// Sets its lines across main axis `k` on the cross axes `u`, `v`,
+    /// about `pivot` on the main axis (a coordinate of some member's
+    /// origin, so at most the origins' largest magnitude).
+    pub(super) fn set_axes(&mut self, [k, u, v]: [usize; 3], pivot: T) {
         let r = self.tr.ray();
         let inv = self.tr.prepared.inv_dir[k];
         self.line = [u, v].map(|a| {
             let slope = r.direction[a] * inv;
-            [r.origin[a] - r.origin[k] * slope, slope]
+            [r.origin[a] + (pivot - r.origin[k]) * slope, slope]
         });
     }
 
@@ -117,16 +120,22 @@ pub(super) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
     })
 }
 
-/// Some members' lines across the main axis `k`, `x_a = c + m·x_k` on each
-/// cross axis `a`, as intervals of intercepts and slopes: a rectangle
-/// holding every such member's beam in a slab, in a few operations however
-/// many rays the packet has (rays starting or stopping inside the slab are
-/// covered as if they went on; the per-ray rectangles cull).
+/// Some members' lines across the main axis `k`, `x_a = c + m·(x_k −
+/// pivot)` on each cross axis `a`, as intervals of values at the pivot and
+/// of slopes: a rectangle holding every such member's beam in a slab, in a
+/// few operations however many rays the packet has (rays starting or
+/// stopping inside the slab are covered as if they went on; the per-ray
+/// rectangles cull). The pivot is a member's origin coordinate: rays from
+/// one point (a camera's) then share `c`, and the rectangle is their exact
+/// envelope; about the axis origin instead, it was too wide by the slopes'
+/// spread times the origin's distance from it.
 pub(super) struct Lines<T> {
-    /// Per cross axis, lowest and highest intercept.
+    /// Per cross axis, lowest and highest value at the pivot.
     c: [[T; 2]; 2],
     /// Per cross axis, lowest and highest slope.
     m: [[T; 2]; 2],
+    /// Where on the main axis the lines are taken from.
+    pivot: T,
     /// The widest member's pad.
     pad: T,
     /// Largest origin coordinate, intercept and slope magnitudes, for the
@@ -139,13 +148,14 @@ pub(super) struct Lines<T> {
 impl<T: Real> Lines<T> {
     /// The lines of the members of `live` (a bit per member), `None` when
     /// there is none.
-    pub(super) fn of(members: &[Member<T>], live: u64) -> Option<Self> {
+    pub(super) fn of(members: &[Member<T>], live: u64, pivot: T) -> Option<Self> {
         let mut lines: Option<Self> = None;
         for m in bits(live).map(|i| &members[i]) {
             let [[cu, mu], [cv, mv]] = m.line;
             let l = lines.get_or_insert(Self {
                 c: [[cu, cu], [cv, cv]],
                 m: [[mu, mu], [mv, mv]],
+                pivot,
                 pad: m.pad,
                 o_mag: m.o_mag,
                 c_mag: T::ZERO,
@@ -165,14 +175,14 @@ impl<T: Real> Lines<T> {
 
     /// A rectangle holding every member's beam while it meets the slab
     /// `[x_lo, x_hi]`: the lines over the slab widened by the pad, with
-    /// `gamma(16)` of the magnitudes for the roundings of the slopes,
-    /// intercepts and this evaluation.
+    /// `gamma(16)` of the magnitudes for the roundings of the slopes, the
+    /// values at the pivot and this evaluation (`|pivot| ≤ o_mag`, so
+    /// `|pivot − o_k| ≤ 2·o_mag` and `|x − pivot| ≤ x_mag + o_mag`).
     pub(super) fn hull(&self, x_lo: T, x_hi: T) -> [T; 4] {
-        let (x0, x1) = (x_lo - self.pad, x_hi + self.pad);
-        let x_mag = x0.abs().max(x1.abs());
-        let err = self.pad
-            + T::gamma(16)
-                * (self.o_mag + self.c_mag + self.m_mag * (x_mag + self.o_mag + self.o_mag));
+        let (x0, x1) = (x_lo - self.pad - self.pivot, x_hi + self.pad - self.pivot);
+        let x_mag = (x_lo - self.pad).abs().max((x_hi + self.pad).abs());
+        let o = self.o_mag;
+        let err = self.pad + T::gamma(16) * (o + self.c_mag + self.m_mag * (x_mag + o + o + o));
         let mut out = [T::ZERO; 4];
         for j in 0..2 {
             let [m0, m1] = self.m[j];

@@ -191,6 +191,9 @@ pub struct Packet<T: Real> {
     axes: [usize; 3],
     /// Whether the rays go up the main axis.
     up: bool,
+    /// Where on the main axis the members' lines are taken from (the
+    /// first member's origin; [`Lines`]).
+    pivot: T,
     /// A bit per member that needs nothing more (an any-hit query's hit).
     finished: u64,
     /// Scratch space, one per grid being walked (nested walks stack up).
@@ -256,12 +259,14 @@ impl<T: Real> Packet<T> {
             suits
         });
         let axes = [k, (k + 1) % 3, (k + 2) % 3];
+        let pivot = members.first().map_or(T::ZERO, |m| m.tr.ray().origin[k]);
         for m in &mut members {
-            m.set_axes(axes);
+            m.set_axes(axes, pivot);
         }
         (!members.is_empty()).then(|| Self {
             members,
             axes,
+            pivot,
             up,
             finished: 0,
             scratch: Vec::new(),
@@ -323,7 +328,7 @@ impl<T: Real> Packet<T> {
         let axes = self.axes;
         let k = axes[0];
         let mut live = mask & !self.finished;
-        let Some(mut lines) = Lines::of(&self.members, live) else {
+        let Some(mut lines) = Lines::of(&self.members, live, self.pivot) else {
             return;
         };
         let mut lines_of = live;
@@ -385,7 +390,7 @@ impl<T: Real> Packet<T> {
                 live &= !self.finished;
                 if live != lines_of {
                     lines_of = live;
-                    match Lines::of(&self.members, live) {
+                    match Lines::of(&self.members, live, self.pivot) {
                         Some(l) => lines = l,
                         None => break 'slabs,
                     }

@@ -36,7 +36,7 @@ fn spread_and_cull_mark_the_same_members() {
             continue;
         };
         let all = u64::MAX >> (64 - packet.members.len());
-        let lines = Lines::of(&packet.members, all).unwrap();
+        let lines = Lines::of(&packet.members, all, packet.pivot).unwrap();
         let k = packet.axes[0];
         let xs = geom.boundaries(k);
         let mut scratch = Scratch::default();
