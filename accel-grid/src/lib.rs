@@ -87,6 +87,10 @@ pub mod resolution;
 mod traverse;
 
 pub use build::{DEFAULT_LAYOUT, GridParams};
+
+/// `accel-core`, for the paths of [`bundle_queries_by_packets`].
+#[doc(hidden)]
+pub use accel_core as __core;
 pub use grid::{Grid, GridPart, SharedGrid};
 
 /// The README's library example, compiled and run as a doc test.

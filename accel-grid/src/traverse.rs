@@ -1,6 +1,6 @@
 //! Queries: the beam-walked DDA with mailboxing and robust early termination.
 
-use crate::bundle::{Answer, runs};
+use crate::bundle::{Answer, Reply, answer_bundle};
 use crate::dda::{BeamWalk, Step};
 use crate::grid::{Grid, GridPart};
 use accel_core::packed::for_each_candidate;
@@ -241,7 +241,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
     fn by_packets<const ANY: bool>(
         &self,
         rays: &[Ray<T>],
-        mut answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
+        answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
     ) {
         let single = |ray: &Ray<T>| {
             if ANY {
@@ -250,22 +250,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
                 self.nearest(ray, &mut ()).map(Answer::Nearest)
             }
         };
-        if !self.bundles_by_packets() {
-            for (i, ray) in rays.iter().enumerate() {
-                answer(i, single(ray));
-            }
-            return;
-        }
-        for (base, run, together) in runs(rays) {
-            if together {
-                self.first
-                    .packet::<ANY, P>(self.primitives(), run, |i, a| answer(base + i, a));
-            } else {
-                for (i, ray) in run.iter().enumerate() {
-                    answer(base + i, single(ray));
-                }
-            }
-        }
+        let packet = |run: &[Ray<T>], mut reply: Reply<'_, _>| {
+            let prims = self.primitives();
+            self.first
+                .packet::<ANY, P>(prims, run, |i, a| reply.send(i, a));
+        };
+        answer_bundle(rays, self.bundles_by_packets(), single, packet, answer);
     }
 
     /// Whether anything is hit, part by part.
@@ -302,20 +292,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
 
     accel_core::ray_queries_from_walks!();
 
-    /// Packets of up to [`crate::bundle::PACKET`] rays walked together
-    /// slice by slice ([`crate::bundle`]) where that pays
-    /// ([`Grid::bundles_by_packets`]); elsewhere one ray at a time.
-    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));
-    }
-
-    /// As [`Accelerator::intersect_bundle`], stopping each ray at its first
-    /// hit.
-    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        self.by_packets::<true>(rays, |i, a| out[i] = a.map(Answer::hits));
-    }
+    crate::bundle_queries_by_packets!();
 
     /// Gathers the references of every cell near the region (grown by a
     /// rounding allowance, so that a primitive the exact test accepts is never

@@ -17,7 +17,7 @@ use crate::node::{Node, entry};
 use crate::octree::Octree;
 use accel_core::{PrimitiveSet, QueryError, Ray, Real};
 use accel_grid::blocks::Blocks;
-use accel_grid::bundle::{Answer, Packet, SliceCells, runs};
+use accel_grid::bundle::{Answer, Packet, Reply, SliceCells, answer_bundle};
 use accel_grid::cells::GridGeometry;
 use core::borrow::Borrow;
 
@@ -88,12 +88,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
 
     /// Answers a bundle, `answer(i, …)` for each ray `rays[i]`: its nearest
     /// hit, or (if `ANY`) whether it hits anything. By packets on a tree of
-    /// one part, runs of rays that head together ([`runs`]); else one ray
-    /// at a time.
+    /// one part, runs of rays that head together
+    /// ([`accel_grid::bundle::runs`]); else one ray at a time.
     pub(crate) fn by_packets<const ANY: bool>(
         &self,
         rays: &[Ray<T>],
-        mut answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
+        answer: impl FnMut(usize, Result<Answer<T>, QueryError>),
     ) {
         let single = |ray: &Ray<T>| {
             if ANY {
@@ -102,32 +102,20 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
                 self.nearest(ray, &mut ()).map(Answer::Nearest)
             }
         };
-        if !self.bundles_by_packets() {
-            for (i, ray) in rays.iter().enumerate() {
-                answer(i, single(ray));
-            }
-            return;
-        }
-
         let root = NodeCells::<T, P, S, ANY> {
             tree: self,
             node: &self.nodes[0],
         };
-        for (base, run, together) in runs(rays) {
-            if together {
-                let alone = |tr: &_| {
-                    if ANY {
-                        Answer::Any(self.any_from_root(tr, &mut ()))
-                    } else {
-                        Answer::Nearest(self.nearest_from_root(tr, &mut ()))
-                    }
-                };
-                Packet::answer::<ANY, _>(&root, run, alone, |i, a| answer(base + i, a));
+        let alone = |tr: &_| {
+            if ANY {
+                Answer::Any(self.any_from_root(tr, &mut ()))
             } else {
-                for (i, ray) in run.iter().enumerate() {
-                    answer(base + i, single(ray));
-                }
+                Answer::Nearest(self.nearest_from_root(tr, &mut ()))
             }
-        }
+        };
+        let packet = |run: &[Ray<T>], mut reply: Reply<'_, _>| {
+            Packet::answer::<ANY, _>(&root, run, alone, |i, a| reply.send(i, a));
+        };
+        answer_bundle(rays, self.bundles_by_packets(), single, packet, answer);
     }
 }

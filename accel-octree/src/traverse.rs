@@ -23,7 +23,6 @@ use accel_core::{
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalRay, nearer, region_matches,
     region_search_box, validate_region,
 };
-use accel_grid::bundle::Answer;
 use accel_grid::dda::BeamWalk;
 use core::borrow::Borrow;
 
@@ -421,21 +420,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
 
     accel_core::ray_queries_from_walks!();
 
-    /// Packets of up to [`accel_grid::bundle::PACKET`] rays walked
-    /// together slice by slice over the root grid, each ray alone below,
-    /// where that pays ([`Octree::bundles_by_packets`]); elsewhere one ray
-    /// at a time.
-    fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        self.by_packets::<false>(rays, |i, a| out[i] = a.map(Answer::into_hit));
-    }
-
-    /// As [`Accelerator::intersect_bundle`], stopping each ray at its first
-    /// hit.
-    fn occluded_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
-        assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        self.by_packets::<true>(rays, |i, a| out[i] = a.map(Answer::hits));
-    }
+    accel_grid::bundle_queries_by_packets!();
 
     /// Gathers the references of every leaf near the region (grown by a
     /// rounding allowance, so that a primitive the exact test accepts is never

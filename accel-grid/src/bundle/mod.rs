@@ -80,6 +80,92 @@ pub fn runs<T: Real>(rays: &[Ray<T>]) -> impl Iterator<Item = (usize, &[Ray<T>],
     })
 }
 
+/// Where the answers of a run of a bundle go: `answer` with the run's
+/// indices moved by `base` ([`answer_bundle`]).
+pub struct Reply<'a, F> {
+    base: usize,
+    answer: &'a mut F,
+}
+
+impl<F> Reply<'_, F> {
+    /// Answers ray `i` of the run.
+    #[inline]
+    pub fn send<T>(&mut self, i: usize, a: Result<Answer<T>, QueryError>)
+    where
+        F: FnMut(usize, Result<Answer<T>, QueryError>),
+    {
+        (self.answer)(self.base + i, a);
+    }
+}
+
+/// Answers a bundle, `answer(i, …)` for each ray `rays[i]`: with
+/// `by_packets`, each run of rays that head together ([`runs`]) through
+/// `packet` (the run, and where its answers go), every other ray through
+/// `single`, one at a time; the driver of the grid's and the octree's
+/// bundle queries.
+pub fn answer_bundle<T: Real, F: FnMut(usize, Result<Answer<T>, QueryError>)>(
+    rays: &[Ray<T>],
+    by_packets: bool,
+    single: impl Fn(&Ray<T>) -> Result<Answer<T>, QueryError>,
+    mut packet: impl FnMut(&[Ray<T>], Reply<'_, F>),
+    mut answer: F,
+) {
+    if !by_packets {
+        for (i, ray) in rays.iter().enumerate() {
+            answer(i, single(ray));
+        }
+        return;
+    }
+    for (base, run, together) in runs(rays) {
+        if together {
+            let answer = &mut answer;
+            packet(run, Reply { base, answer });
+        } else {
+            for (i, ray) in run.iter().enumerate() {
+                answer(base + i, single(ray));
+            }
+        }
+    }
+}
+
+/// The two bundle queries of an `Accelerator` impl (`intersect_bundle`,
+/// `occluded_bundle`), for a structure whose inherent method
+/// `by_packets::<ANY>(&self, rays, answer)` answers each ray of a bundle
+/// with an [`Answer`]: the grid's and the octree's, written once. Use it
+/// inside `impl<T: Real, ...> Accelerator<T> for ...` (the impl's float
+/// type must be named `T`).
+#[macro_export]
+macro_rules! bundle_queries_by_packets {
+    () => {
+        /// Packets of up to `accel_grid::bundle::PACKET` rays walked
+        /// together slice by slice where that pays (`bundles_by_packets`),
+        /// elsewhere one ray at a time; every ray answered as alone.
+        fn intersect_bundle(
+            &self,
+            rays: &[$crate::__core::Ray<T>],
+            out: &mut [::core::result::Result<
+                ::core::option::Option<$crate::__core::Hit<T>>,
+                $crate::__core::QueryError,
+            >],
+        ) {
+            assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+            self.by_packets::<false>(rays, |i, a| {
+                out[i] = a.map($crate::bundle::Answer::into_hit);
+            });
+        }
+
+        /// As `intersect_bundle`, stopping each ray at its first hit.
+        fn occluded_bundle(
+            &self,
+            rays: &[$crate::__core::Ray<T>],
+            out: &mut [::core::result::Result<bool, $crate::__core::QueryError>],
+        ) {
+            assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
+            self.by_packets::<true>(rays, |i, a| out[i] = a.map($crate::bundle::Answer::hits));
+        }
+    };
+}
+
 /// One ray's answer: its nearest hit, or whether it hits anything.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Answer<T> {
@@ -418,24 +504,15 @@ impl<T: Real> Packet<T> {
         for &(_, place, _) in &scratch.cells {
             scratch.meeting[place] = 0;
         }
-        let mut still = live;
-        for i in bits(live & !self.finished) {
-            let f = match self.members[i].footprint(self.axes, x_lo, x_hi) {
-                Footprint::Past => {
-                    still &= !(1 << i);
-                    continue;
-                }
-                Footprint::NotYet => continue,
-                Footprint::Within(f) => f,
-            };
-            for &(_, place, [cu, cv]) in &scratch.cells {
+        let (cells, meeting) = (&scratch.cells, &mut scratch.meeting);
+        self.footprints(live, x_lo, x_hi, |i, f| {
+            for &(_, place, [cu, cv]) in cells {
                 let (cu, cv) = (cu as usize, cv as usize);
                 if f[0] <= bu[cu + 1] && f[1] >= bu[cu] && f[2] <= bv[cv + 1] && f[3] >= bv[cv] {
-                    scratch.meeting[place] |= 1 << i;
+                    meeting[place] |= 1 << i;
                 }
             }
-        }
-        still
+        })
     }
 
     /// Marks, per cell of `window` (in `meeting`), the members of `live`
@@ -465,21 +542,35 @@ impl<T: Real> Packet<T> {
             }
             (a.max(first), geom.axis_cell(axis, hi).min(last))
         };
+        self.footprints(live, x_lo, x_hi, |i, f| {
+            let (u0, u1) = span(u, f[0], f[1], window.u);
+            let (v0, v1) = span(v, f[2], f[3], window.v);
+            for cv in v0..=v1 {
+                let row = (cv - window.v[0]) as usize * width;
+                for cu in u0..=u1 {
+                    meeting[row + (cu - window.u[0]) as usize] |= 1 << i;
+                }
+            }
+        })
+    }
+
+    /// Hands `within` each unfinished member of `live` whose beam is in the
+    /// slab `[x_lo, x_hi]`, with its rectangle there ([`Member::footprint`]);
+    /// returns `live` without the members past the slab.
+    #[inline]
+    fn footprints(
+        &self,
+        live: u64,
+        x_lo: T,
+        x_hi: T,
+        mut within: impl FnMut(usize, [T; 4]),
+    ) -> u64 {
         let mut still = live;
         for i in bits(live & !self.finished) {
             match self.members[i].footprint(self.axes, x_lo, x_hi) {
                 Footprint::Past => still &= !(1 << i),
                 Footprint::NotYet => {}
-                Footprint::Within(f) => {
-                    let (u0, u1) = span(u, f[0], f[1], window.u);
-                    let (v0, v1) = span(v, f[2], f[3], window.v);
-                    for cv in v0..=v1 {
-                        let row = (cv - window.v[0]) as usize * width;
-                        for cu in u0..=u1 {
-                            meeting[row + (cu - window.u[0]) as usize] |= 1 << i;
-                        }
-                    }
-                }
+                Footprint::Within(f) => within(i, f),
             }
         }
         still
