@@ -308,8 +308,19 @@ impl<T: Real> Aabb<T> {
         if !inv_dir.is_finite() {
             return self.divided_slabs(origin, dir, margin);
         }
-        // Straight-line code, no early exit: the three slabs at once, each
-        // end ordered by selects (a branch on them waited for the products).
+        let (t0, t1) = self.finite_slabs(origin, inv_dir, margin);
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    /// [`Aabb::beam_interval_inv`]'s interval for a finite `inv_dir`,
+    /// widened, and empty (`t0 > t1`, or NaN) where the beam misses:
+    /// straight-line code, no early exit, so that the three slabs are taken
+    /// at once (each end ordered by selects: a branch on them waited for the
+    /// products) and several rays' intervals can be computed side by side
+    /// ([`crate::TraversalRay::lanes_with_wide_hits`]).
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn finite_slabs(&self, origin: Vec3<T>, inv_dir: Vec3<T>, margin: T) -> (T, T) {
         let lo = (self.min - origin) - Vec3::splat(margin);
         let hi = (self.max - origin) + Vec3::splat(margin);
         let (a, b) = (lo * inv_dir, hi * inv_dir);
@@ -322,7 +333,7 @@ impl<T: Real> Aabb<T> {
             lesser(greater(a.x, b.x), greater(a.y, b.y)),
             greater(a.z, b.z),
         );
-        widened(t0, t1)
+        widen(t0, t1)
     }
 
     /// [`Aabb::beam_interval`] by divisions, one slab after the other.
@@ -354,18 +365,17 @@ impl<T: Real> Aabb<T> {
         // finite (or infinite) offset by a nonzero component, never NaN.
         let t0 = greater(greater(n0, n1), n2);
         let t1 = lesser(lesser(f0, f1), f2);
-        widened(t0, t1)
+        let (t0, t1) = widen(t0, t1);
+        (t0 <= t1).then_some((t0, t1))
     }
 }
 
-/// The slab test's interval `[t0, t1]` widened by `2·gamma(3)` of each end,
-/// or `None` when it is empty.
+/// The slab test's interval `[t0, t1]` widened by `2·gamma(3)` of each end
+/// (empty where `t0 > t1`).
 #[inline(always)]
-fn widened<T: Real>(t0: T, t1: T) -> Option<(T, T)> {
+fn widen<T: Real>(t0: T, t1: T) -> (T, T) {
     let slack = T::gamma(3) + T::gamma(3);
-    let t0 = t0 - t0.abs() * slack;
-    let t1 = t1 + t1.abs() * slack;
-    (t0 <= t1).then_some((t0, t1))
+    (t0 - t0.abs() * slack, t1 + t1.abs() * slack)
 }
 
 #[cfg(test)]

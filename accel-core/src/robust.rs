@@ -79,7 +79,64 @@ impl<T: Real> TraversalRay<T> {
         let b: Aabb<T::Wide> = bounds.cast();
         let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
         let (t0, t1) = b.beam_interval_inv(o, d, PreparedRay::reciprocal(d), delta)?;
-        // Rounded outward to `T`: the beam only grows.
+        Self::from_wide_beam(ray, delta, t0, t1)
+    }
+
+    /// [`TraversalRay::with_wide_hits`] for several rays through the same
+    /// bounds, lane by lane the same arithmetic, so the same bits. The wide
+    /// beams' slab tests, where a ray that misses the bounds spends its
+    /// preparation (three wide divisions, the reach, the slabs), are
+    /// written for `N` lanes side by side, which the compiler turns into
+    /// vector instructions; only the rays that meet the bounds are then
+    /// prepared further, one by one. A ray with a zero direction component
+    /// (an infinite wide reciprocal) takes `with_wide_hits` itself.
+    #[inline]
+    #[must_use]
+    pub fn lanes_with_wide_hits<const N: usize>(
+        rays: [&Ray<T>; N],
+        bounds: &Aabb<T>,
+    ) -> [Option<Self>; N] {
+        if bounds.is_empty() {
+            return [None; N];
+        }
+        let b: Aabb<T::Wide> = bounds.cast();
+        let zero = <T::Wide as Real>::ZERO;
+        let (mut o, mut d) = ([[zero; N]; 3], [[zero; N]; 3]);
+        for (l, ray) in rays.iter().enumerate() {
+            for a in 0..3 {
+                o[a][l] = ray.origin[a].to_wide();
+                d[a][l] = ray.direction[a].to_wide();
+            }
+        }
+        let mut beam = [[zero; N]; 3];
+        let mut finite = [false; N];
+        for l in 0..N {
+            let o = Vec3::new(o[0][l], o[1][l], o[2][l]);
+            let inv = PreparedRay::reciprocal(Vec3::new(d[0][l], d[1][l], d[2][l]));
+            let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
+            let (t0, t1) = b.finite_slabs(o, inv, delta);
+            (beam[0][l], beam[1][l], beam[2][l]) = (delta, t0, t1);
+            finite[l] = inv.is_finite();
+        }
+        let mut out = [None; N];
+        for (l, (ray, out)) in rays.iter().zip(&mut out).enumerate() {
+            let (delta, t0, t1) = (beam[0][l], beam[1][l], beam[2][l]);
+            *out = if !finite[l] {
+                Self::with_wide_hits(ray, bounds)
+            } else if ray.is_empty_interval() || !(t0 <= t1) {
+                None
+            } else {
+                Self::from_wide_beam(ray, delta, t0, t1)
+            };
+        }
+        out
+    }
+
+    /// The traversal ray of a wide beam of half-width `delta` entering the
+    /// bounds at `t0` and leaving at `t1`, each rounded outward to `T`, so
+    /// that the beam only grows.
+    #[inline(always)]
+    fn from_wide_beam(ray: &Ray<T>, delta: T::Wide, t0: T::Wide, t1: T::Wide) -> Option<Self> {
         Self::clipped(
             ray,
             PreparedRay::reciprocal(ray.direction),
@@ -298,6 +355,90 @@ mod tests {
     fn point(max_exp: i32) -> impl proptest::strategy::Strategy<Value = Vec3<f32>> {
         use proptest::prelude::*;
         (spread(max_exp), spread(max_exp), spread(max_exp)).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    /// A direction component: spread over binades, or a signed zero.
+    fn component() -> impl proptest::strategy::Strategy<Value = f32> {
+        use proptest::prelude::*;
+        prop_oneof![6 => spread(8), 1 => Just(0.0f32), 1 => Just(-0.0f32)]
+    }
+
+    /// A valid ray whose direction may have zero components and whose
+    /// interval may be empty.
+    fn lane_ray() -> impl proptest::strategy::Strategy<Value = Ray<f32>> {
+        use proptest::prelude::*;
+        (
+            point(8),
+            (component(), component(), component()),
+            -2.0..8.0f32,
+            -2.0..64.0f32,
+        )
+            .prop_filter_map("a zero direction", |(o, (x, y, z), t_min, t_max)| {
+                Ray::with_interval(o, Vec3::new(x, y, z), t_min, t_max).ok()
+            })
+    }
+
+    /// Every field of a traversal ray, as bits.
+    fn bits<T: Real>(tr: &TraversalRay<T>) -> Vec<u64> {
+        let p = &tr.prepared;
+        let v = |v: Vec3<T>| [v.x, v.y, v.z].map(T::to_bits_u64);
+        let mut out = Vec::new();
+        out.extend(v(p.ray.origin));
+        out.extend(v(p.ray.direction));
+        out.extend(v(p.inv_dir));
+        out.extend(
+            [
+                p.ray.t_min,
+                p.ray.t_max,
+                tr.delta,
+                tr.t_tol,
+                tr.t_start,
+                tr.t_end,
+            ]
+            .map(T::to_bits_u64),
+        );
+        out.extend(p.axes.map(|a| a as u64));
+        out.extend([p.shear.x, p.shear.y, p.shear.z].map(f64::to_bits));
+        out
+    }
+
+    /// [`TraversalRay::lanes_with_wide_hits`] against
+    /// [`TraversalRay::with_wide_hits`] ray by ray, in `T`.
+    fn lanes_match<T: Real>(
+        rays: &[Ray<f32>],
+        bounds: &Aabb<f32>,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let rays: Vec<Ray<T>> = rays.iter().map(Ray::cast).collect();
+        let bounds: Aabb<T> = bounds.cast();
+        let members: [&Ray<T>; 8] = core::array::from_fn(|l| &rays[l]);
+        let lanes = TraversalRay::lanes_with_wide_hits(members, &bounds);
+        for (ray, lane) in rays.iter().zip(&lanes) {
+            let single = TraversalRay::with_wide_hits(ray, &bounds);
+            proptest::prop_assert_eq!(
+                lane.as_ref().map(bits),
+                single.as_ref().map(bits),
+                "ray {:?}",
+                ray
+            );
+        }
+        Ok(())
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(3_000))]
+        /// Rays prepared side by side are prepared as one by one, bit for
+        /// bit, in both precisions: rays that meet or miss the box, zero
+        /// direction components (the single path), empty intervals.
+        #[test]
+        fn lanes_prepare_rays_as_one_by_one(
+            rays in proptest::collection::vec(lane_ray(), 8),
+            a in point(6),
+            b in point(6),
+        ) {
+            let bounds = Aabb::new(a.min(b), a.max(b));
+            lanes_match::<f32>(&rays, &bounds)?;
+            lanes_match::<f64>(&rays, &bounds)?;
+        }
     }
 
     proptest::proptest! {

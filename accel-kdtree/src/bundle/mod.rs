@@ -207,25 +207,39 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     }
 
     /// The traversal rays of the packet's rays (`index` into `rays`) through
-    /// a part with `bounds`, with the lanes whose beam meets the part. Unused
-    /// lanes repeat the first ray that has one, and are not in the set.
+    /// a part with `bounds`, prepared side by side into `trs`; returns the
+    /// lanes whose beam meets the part.
     fn packet_rays(
         &self,
         rays: &[Ray<T>],
         index: &[usize],
         bounds: &accel_core::Aabb<T>,
-    ) -> Option<([TraversalRay<T>; PACKET], Lanes)> {
-        let trs: [Option<TraversalRay<T>>; PACKET] = core::array::from_fn(|l| {
-            index
-                .get(l)
-                .and_then(|&i| self.traversal_ray(&rays[i], bounds))
-        });
-        let filler = trs.iter().flatten().next().copied()?;
-        let lanes = trs
-            .iter()
+        trs: &mut [Option<TraversalRay<T>>; PACKET],
+    ) -> Lanes {
+        // Unused lanes repeat the first ray, and are not in the set.
+        let members: [&Ray<T>; PACKET] =
+            core::array::from_fn(|l| &rays[*index.get(l).unwrap_or(&index[0])]);
+        *trs = if self.primitives().wide_hits() {
+            TraversalRay::lanes_with_wide_hits(members, bounds)
+        } else {
+            members.map(|ray| TraversalRay::new(ray, bounds))
+        };
+        trs.iter()
             .enumerate()
-            .fold(0, |m, (l, t)| m | (Lanes::from(t.is_some()) << l));
-        Some((trs.map(|t| t.unwrap_or(filler)), lanes))
+            .fold(0, |m, (l, t)| m | (Lanes::from(t.is_some()) << l))
+            & first_lanes(index.len())
+    }
+
+    /// The lanes' traversal rays, as references: lanes without one (not in
+    /// the packet's set) repeat one that has.
+    fn lane_refs(trs: &[Option<TraversalRay<T>>; PACKET]) -> [&TraversalRay<T>; PACKET] {
+        let filler = trs.iter().flatten().next();
+        core::array::from_fn(|l| {
+            trs[l]
+                .as_ref()
+                .or(filler)
+                .expect("packet_rays returns at least one lane")
+        })
     }
 
     /// The nearest hit of each ray of a packet, part by part as
@@ -237,14 +251,17 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         stack: &mut Vec<Entry<T>>,
     ) -> [Option<Hit<T>>; PACKET] {
         let mut best = [None; PACKET];
+        let mut trs = [None; PACKET];
         for part in &self.parts {
-            let Some((trs, lanes)) = self.packet_rays(rays, index, &part.bounds) else {
+            let lanes = self.packet_rays(rays, index, &part.bounds, &mut trs);
+            if lanes == 0 {
                 continue;
-            };
+            }
+            let trs = Self::lane_refs(&trs);
             let mut v: [Nearest<'_, T, P>; PACKET] = core::array::from_fn(|l| Nearest {
                 prims: self.primitives(),
                 packed: self.packed.as_ref(),
-                tr: &trs[l],
+                tr: trs[l],
                 mailbox: Mailbox::new(),
                 best: best[l],
             });
@@ -266,14 +283,17 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     ) -> [bool; PACKET] {
         let mut found = [false; PACKET];
         let mut open = first_lanes(index.len());
+        let mut trs = [None; PACKET];
         for part in &self.parts {
-            let Some((trs, lanes)) = self.packet_rays(rays, index, &part.bounds) else {
+            let lanes = self.packet_rays(rays, index, &part.bounds, &mut trs);
+            if lanes == 0 {
                 continue;
-            };
+            }
+            let trs = Self::lane_refs(&trs);
             let mut v: [AnyHit<'_, T, P>; PACKET] = core::array::from_fn(|l| AnyHit {
                 prims: self.primitives(),
                 packed: self.packed.as_ref(),
-                tr: &trs[l],
+                tr: trs[l],
                 mailbox: Mailbox::new(),
                 found: false,
             });
@@ -296,7 +316,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     fn walk_packet<V: Visitor<T>>(
         &self,
         root: usize,
-        trs: &[TraversalRay<T>; PACKET],
+        trs: &[&TraversalRay<T>; PACKET],
         lanes: Lanes,
         v: &mut [V; PACKET],
         stack: &mut Vec<Entry<T>>,
@@ -315,28 +335,30 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     fn walk_packet_with<const NARROW: bool, V: Visitor<T>>(
         &self,
         root: usize,
-        trs: &[TraversalRay<T>; PACKET],
+        trs: &[&TraversalRay<T>; PACKET],
         lanes: Lanes,
         v: &mut [V; PACKET],
         stack: &mut Vec<Entry<T>>,
     ) {
-        let per_lane = |f: &dyn Fn(&TraversalRay<T>) -> T| -> [T; PACKET] {
-            core::array::from_fn(|l| f(&trs[l]))
-        };
         // Per-axis values indexed by `axis & 3`, as in the single walk (the
         // fourth row is never read).
-        let axes = |f: &dyn Fn(&TraversalRay<T>, usize) -> T| -> [[T; PACKET]; 4] {
-            core::array::from_fn(|a| per_lane(&|t| if a < 3 { f(t, a) } else { T::ZERO }))
+        let widen = T::ONE + T::gamma(BAND_ROUNDINGS);
+        let mut rays = LaneRays {
+            o: [[T::ZERO; PACKET]; 4],
+            inv: [[T::ZERO; PACKET]; 4],
+            half_inv: [[T::ZERO; PACKET]; 4],
         };
-        let rays = LaneRays {
-            o: axes(&|t, a| t.ray().origin[a]),
-            inv: axes(&|t, a| t.prepared.inv_dir[a]),
-            half_inv: axes(&|t, a| {
-                t.prepared.inv_dir[a].abs() * (T::ONE + T::gamma(BAND_ROUNDINGS))
-            }),
-        };
-        let delta = per_lane(&|t| t.delta);
-        let max_d = per_lane(&|t| t.ray().direction.abs().max_component());
+        let (mut delta, mut max_d) = ([T::ZERO; PACKET], [T::ZERO; PACKET]);
+        let (mut t0, mut t1) = ([T::ZERO; PACKET], [T::ZERO; PACKET]);
+        for (l, t) in trs.iter().enumerate() {
+            for a in 0..3 {
+                rays.o[a][l] = t.ray().origin[a];
+                rays.inv[a][l] = t.prepared.inv_dir[a];
+                rays.half_inv[a][l] = t.prepared.inv_dir[a].abs() * widen;
+            }
+            (delta[l], max_d[l]) = (t.delta, t.ray().direction.abs().max_component());
+            (t0[l], t1[l]) = (t.t_start, t.t_end);
+        }
         // One octant: the first lane's signs are every lane's.
         let positive: [bool; 4] =
             core::array::from_fn(|a| a < 3 && trs[0].ray().direction[a] > T::ZERO);
@@ -345,8 +367,6 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         let mut ended: Lanes = 0;
         stack.clear();
         let (mut idx, mut mask) = (root, lanes);
-        let mut t0 = per_lane(&|t| t.t_start);
-        let mut t1 = per_lane(&|t| t.t_end);
         loop {
             let live = at_or_before(&t0, &cutoff) & mask & !ended;
             if live != 0 {
