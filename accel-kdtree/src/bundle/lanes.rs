@@ -4,12 +4,16 @@
 //!
 //! Every lane computes exactly what the single walk computes for its ray,
 //! with the same operations in the same order and no fused multiply–add, so
-//! the results are the same bits. On x86-64 the lanes run in SSE2 (the
-//! baseline, no detection needed), four `f32` or two `f64` per instruction;
-//! elsewhere one at a time ([`cross_portable`]). The selects map one to one:
+//! the results are the same bits. The lanes run in one of two instruction
+//! sets ([`LaneSet`]): SSE2, part of x86-64's baseline, four `f32` or two
+//! `f64` per instruction ([`Baseline`]; elsewhere one lane at a time,
+//! [`cross_portable`]), or AVX, eight `f32` or four `f64`, where the CPU has
+//! AVX2 ([`Avx`], detected once by [`accel_core::packed::simd_level`], which
+//! `ACCEL_SIMD=portable` caps to the baseline). The selects map one to one:
 //! `minps(a, b)` is `if a < b { a } else { b }` and `maxps(a, b)` is
 //! `if a > b { a } else { b }` (Intel's definition, `NaN` and signed zeros
-//! included), `cmpleps` is `<=`, and `|x|` clears the sign bit.
+//! included, the same for their AVX forms), `cmpleps` and AVX's `cmpps`
+//! with `_CMP_LE_OS` are `<=`, and `|x|` clears the sign bit.
 
 use crate::traverse::finite_band;
 use accel_core::Real;
@@ -43,9 +47,120 @@ pub(crate) struct Crossing<T> {
     pub(crate) to_far: Lanes,
 }
 
-/// The lanes where `a[l] <= b[l]`.
+/// An instruction set for a packet's lanes.
+pub(crate) trait LaneSet: Copy {
+    /// The lanes where `a[l] <= b[l]`.
+    fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes;
+
+    /// Each lane's crossing of the plane `x[axis] = s` by beams of
+    /// half-width `delta`, within the intervals `[t0, t1]`.
+    fn cross<T: Real>(
+        self,
+        rays: &LaneRays<T>,
+        axis: usize,
+        delta: &[T; PACKET],
+        s: T,
+        t0: &[T; PACKET],
+        t1: &[T; PACKET],
+    ) -> Crossing<T>;
+}
+
+/// The baseline: SSE2 on x86-64, one lane at a time elsewhere.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Baseline;
+
+impl LaneSet for Baseline {
+    #[inline(always)]
+    fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
+        at_or_before(a, b)
+    }
+
+    #[inline(always)]
+    fn cross<T: Real>(
+        self,
+        rays: &LaneRays<T>,
+        axis: usize,
+        delta: &[T; PACKET],
+        s: T,
+        t0: &[T; PACKET],
+        t1: &[T; PACKET],
+    ) -> Crossing<T> {
+        cross(rays, axis, delta, s, t0, t1)
+    }
+}
+
+/// AVX lanes, eight `f32` or four `f64` per instruction: a token that
+/// exists only where the CPU has AVX2 ([`Avx::detect`]).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx {
+    /// The token, where [`accel_core::packed::simd_level`] allows AVX2.
+    #[inline]
+    pub(crate) fn detect() -> Option<Avx> {
+        (accel_core::packed::simd_level() >= accel_core::packed::SimdLevel::Avx2).then_some(Avx(()))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl LaneSet for Avx {
+    #[inline(always)]
+    fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
+        if let (Some(a), Some(b)) = (cast::<_, [f32; PACKET]>(a), cast(b)) {
+            // SAFETY: an `Avx` exists only where the CPU has AVX2.
+            return unsafe { avx_f32::at_or_before(a, b) };
+        }
+        if let (Some(a), Some(b)) = (cast::<_, [f64; PACKET]>(a), cast(b)) {
+            // SAFETY: an `Avx` exists only where the CPU has AVX2.
+            return unsafe { avx_f64::at_or_before(a, b) };
+        }
+        at_or_before(a, b)
+    }
+
+    #[inline(always)]
+    fn cross<T: Real>(
+        self,
+        rays: &LaneRays<T>,
+        axis: usize,
+        delta: &[T; PACKET],
+        s: T,
+        t0: &[T; PACKET],
+        t1: &[T; PACKET],
+    ) -> Crossing<T> {
+        let mut out = Crossing {
+            near_t1: [T::ZERO; PACKET],
+            far_t0: [T::ZERO; PACKET],
+            to_near: 0,
+            to_far: 0,
+        };
+        // The AVX lanes of `$t` where `T` is `$t`.
+        macro_rules! avx {
+            ($t:ty, $module:ident) => {
+                if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
+                    cast::<_, LaneRays<$t>>(rays),
+                    cast(delta),
+                    cast(&s),
+                    cast(t0),
+                    cast(t1),
+                    cast_mut::<_, Crossing<$t>>(&mut out),
+                ) {
+                    // SAFETY: an `Avx` exists only where the CPU has AVX2.
+                    unsafe { $module::cross(r, axis & 3, d, s, a, b, o) };
+                    return out;
+                }
+            };
+        }
+        avx!(f32, avx_f32);
+        avx!(f64, avx_f64);
+        cross(rays, axis, delta, s, t0, t1)
+    }
+}
+
+/// [`LaneSet::at_or_before`] in SSE2.
 #[inline(always)]
-pub(crate) fn at_or_before<T: Real>(a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
+fn at_or_before<T: Real>(a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
     #[cfg(target_arch = "x86_64")]
     {
         if let (Some(a), Some(b)) = (cast::<_, [f32; PACKET]>(a), cast(b)) {
@@ -60,10 +175,9 @@ pub(crate) fn at_or_before<T: Real>(a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
     (0..PACKET).fold(0, |m, l| m | (Lanes::from(a[l] <= b[l]) << l))
 }
 
-/// Each lane's crossing of the plane `x[axis] = s` by beams of half-width
-/// `delta`, within the intervals `[t0, t1]`.
+/// [`LaneSet::cross`] in SSE2.
 #[inline(always)]
-pub(crate) fn cross<T: Real>(
+fn cross<T: Real>(
     rays: &LaneRays<T>,
     axis: usize,
     delta: &[T; PACKET],
@@ -145,14 +259,14 @@ fn cast_mut<X: 'static, U: 'static>(x: &mut X) -> Option<&mut U> {
     (x as &mut dyn core::any::Any).downcast_mut()
 }
 
-/// The SSE2 lanes of one float type: `$t` in `$v` registers of `$w` lanes,
-/// with the intrinsics' suffix `ps` or `pd` spelled out.
+/// The lanes of one float type in one instruction set (`$feature`): `$t`
+/// in `$v` registers of `$w` lanes, with the intrinsics spelled out.
 #[cfg(target_arch = "x86_64")]
-macro_rules! sse_lanes {
-    ($module:ident, $t:ty, $v:ty, $w:expr, $load:ident, $store:ident, $set1:ident,
-     $add:ident, $sub:ident, $mul:ident, $min:ident, $max:ident, $andnot:ident,
-     $cmple:ident, $movemask:ident) => {
-        /// SSE2 lanes of one float type.
+macro_rules! simd_lanes {
+    ($module:ident, $doc:literal, $feature:literal, $t:ty, $v:ty, $w:expr, $load:ident,
+     $store:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $min:ident, $max:ident,
+     $andnot:ident, $cmple:expr, $movemask:ident) => {
+        #[doc = $doc]
         mod $module {
             use super::{Crossing, LaneRays, Lanes, PACKET};
             use crate::traverse::BAND_ROUNDINGS;
@@ -164,7 +278,7 @@ macro_rules! sse_lanes {
 
             /// Lanes `W·c ..` of `a`.
             #[inline]
-            #[target_feature(enable = "sse2")]
+            #[target_feature(enable = $feature)]
             fn load(a: &[$t; PACKET], c: usize) -> $v {
                 debug_assert!(W * c + W <= PACKET);
                 // SAFETY: `c < PACKET / W`, so the `W` values read from
@@ -174,7 +288,7 @@ macro_rules! sse_lanes {
 
             /// Stores `v` to lanes `W·c ..` of `a`.
             #[inline]
-            #[target_feature(enable = "sse2")]
+            #[target_feature(enable = $feature)]
             fn store(a: &mut [$t; PACKET], c: usize, v: $v) {
                 debug_assert!(W * c + W <= PACKET);
                 // SAFETY: as in `load`, writing.
@@ -183,16 +297,16 @@ macro_rules! sse_lanes {
 
             /// [`super::at_or_before`].
             #[inline]
-            #[target_feature(enable = "sse2")]
+            #[target_feature(enable = $feature)]
             pub(super) fn at_or_before(a: &[$t; PACKET], b: &[$t; PACKET]) -> Lanes {
                 (0..PACKET / W).fold(0, |m, c| {
-                    m | (($movemask($cmple(load(a, c), load(b, c))) as Lanes) << (W * c))
+                    m | (($movemask(($cmple)(load(a, c), load(b, c))) as Lanes) << (W * c))
                 })
             }
 
             /// [`super::cross`].
             #[inline]
-            #[target_feature(enable = "sse2")]
+            #[target_feature(enable = $feature)]
             pub(super) fn cross(
                 rays: &LaneRays<$t>,
                 axis: usize,
@@ -220,8 +334,8 @@ macro_rules! sse_lanes {
                     let far_t0 = $max(lo, a);
                     store(&mut out.near_t1, c, near_t1);
                     store(&mut out.far_t0, c, far_t0);
-                    to_near |= ($movemask($cmple(a, near_t1)) as Lanes) << (W * c);
-                    to_far |= ($movemask($cmple(far_t0, b)) as Lanes) << (W * c);
+                    to_near |= ($movemask(($cmple)(a, near_t1)) as Lanes) << (W * c);
+                    to_far |= ($movemask(($cmple)(far_t0, b)) as Lanes) << (W * c);
                 }
                 out.to_near = to_near;
                 out.to_far = to_far;
@@ -231,8 +345,10 @@ macro_rules! sse_lanes {
 }
 
 #[cfg(target_arch = "x86_64")]
-sse_lanes!(
+simd_lanes!(
     sse_f32,
+    "SSE2 lanes of `f32`.",
+    "sse2",
     f32,
     __m128,
     4,
@@ -250,8 +366,10 @@ sse_lanes!(
 );
 
 #[cfg(target_arch = "x86_64")]
-sse_lanes!(
+simd_lanes!(
     sse_f64,
+    "SSE2 lanes of `f64`.",
+    "sse2",
     f64,
     __m128d,
     2,
@@ -266,6 +384,48 @@ sse_lanes!(
     _mm_andnot_pd,
     _mm_cmple_pd,
     _mm_movemask_pd
+);
+
+#[cfg(target_arch = "x86_64")]
+simd_lanes!(
+    avx_f32,
+    "AVX lanes of `f32`.",
+    "avx",
+    f32,
+    __m256,
+    8,
+    _mm256_loadu_ps,
+    _mm256_storeu_ps,
+    _mm256_set1_ps,
+    _mm256_add_ps,
+    _mm256_sub_ps,
+    _mm256_mul_ps,
+    _mm256_min_ps,
+    _mm256_max_ps,
+    _mm256_andnot_ps,
+    _mm256_cmp_ps::<_CMP_LE_OS>,
+    _mm256_movemask_ps
+);
+
+#[cfg(target_arch = "x86_64")]
+simd_lanes!(
+    avx_f64,
+    "AVX lanes of `f64`.",
+    "avx",
+    f64,
+    __m256d,
+    4,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd,
+    _mm256_set1_pd,
+    _mm256_add_pd,
+    _mm256_sub_pd,
+    _mm256_mul_pd,
+    _mm256_min_pd,
+    _mm256_max_pd,
+    _mm256_andnot_pd,
+    _mm256_cmp_pd::<_CMP_LE_OS>,
+    _mm256_movemask_pd
 );
 
 #[cfg(test)]
@@ -283,8 +443,13 @@ mod tests {
         ]
     }
 
-    /// The SIMD crossing against the portable one, bit for bit, in `T`.
-    fn same_bits<T: Real>(v: &[[f64; PACKET]], s: f64, axis: usize) -> Result<(), TestCaseError> {
+    /// The crossing in `set` against the portable one, bit for bit, in `T`.
+    fn same_bits<T: Real>(
+        set: impl LaneSet,
+        v: &[[f64; PACKET]],
+        s: f64,
+        axis: usize,
+    ) -> Result<(), TestCaseError> {
         let t = |a: &[f64; PACKET]| a.map(T::from_f64);
         let rows = |a: &[f64; PACKET]| [t(a), t(a), t(a), t(a)];
         let rays = LaneRays {
@@ -294,7 +459,7 @@ mod tests {
         };
         let (delta, t0, t1) = (t(&v[3]), t(&v[4]), t(&v[5]));
         let s = T::from_f64(s);
-        let fast = cross(&rays, axis, &delta, s, &t0, &t1);
+        let fast = set.cross(&rays, axis, &delta, s, &t0, &t1);
         let slow = cross_portable(&rays, axis, &delta, s, &t0, &t1);
         let bits = |a: &[T; PACKET]| a.map(|x| x.to_bits_u64());
         prop_assert_eq!(bits(&fast.near_t1), bits(&slow.near_t1));
@@ -303,14 +468,15 @@ mod tests {
         prop_assert_eq!(fast.to_far, slow.to_far);
         let (a, b) = (t(&v[6]), t(&v[7]));
         let portable = (0..PACKET).fold(0, |m, l| m | (Lanes::from(a[l] <= b[l]) << l));
-        prop_assert_eq!(at_or_before(&a, &b), portable);
+        prop_assert_eq!(set.at_or_before(&a, &b), portable);
         Ok(())
     }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(4_000))]
-        /// Whatever the instruction set, every lane's crossing is the single
-        /// walk's, bit for bit, signed zeros, infinities and NaN included.
+        /// In every instruction set this CPU has, every lane's crossing is
+        /// the single walk's, bit for bit, signed zeros, infinities and NaN
+        /// included.
         #[test]
         fn lanes_cross_as_the_single_walk(
             // Eight rows of lanes, drawn on the heap (arrays of strategies
@@ -323,8 +489,13 @@ mod tests {
                 .chunks(PACKET)
                 .map(|c| core::array::from_fn(|l| c[l]))
                 .collect();
-            same_bits::<f32>(&v, s, axis)?;
-            same_bits::<f64>(&v, s, axis)?;
+            same_bits::<f32>(Baseline, &v, s, axis)?;
+            same_bits::<f64>(Baseline, &v, s, axis)?;
+            #[cfg(target_arch = "x86_64")]
+            if let Some(avx) = Avx::detect() {
+                same_bits::<f32>(avx, &v, s, axis)?;
+                same_bits::<f64>(avx, &v, s, axis)?;
+            }
         }
     }
 }

@@ -27,7 +27,7 @@ use crate::traverse::{AnyHit, BAND_ROUNDINGS, Nearest, STACK, Visitor};
 use crate::tree::KdTree;
 use accel_core::{Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real, TraversalRay};
 use core::borrow::Borrow;
-use lanes::{LaneRays, Lanes, PACKET, at_or_before, cross};
+use lanes::{Baseline, LaneRays, LaneSet, Lanes, PACKET};
 
 mod lanes;
 
@@ -312,7 +312,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     }
 
     /// Walks a packet, narrowing each ray's beam per node where the tree
-    /// says it pays (as [`KdTree::walk`]).
+    /// says it pays (as [`KdTree::walk`]), in AVX lanes where the CPU has
+    /// AVX2, else in the baseline's.
     fn walk_packet<V: Visitor<T>>(
         &self,
         root: usize,
@@ -321,19 +322,59 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         v: &mut [V; PACKET],
         stack: &mut Vec<Entry<T>>,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = lanes::Avx::detect() {
+            // SAFETY: an `Avx` exists only where the CPU has AVX2.
+            unsafe { self.walk_packet_avx(avx, root, trs, lanes, v, stack) };
+            return;
+        }
+        self.walk_packet_in(Baseline, root, trs, lanes, v, stack);
+    }
+
+    /// [`KdTree::walk_packet`] compiled for AVX2, so that the AVX lanes'
+    /// intrinsics inline into the walk.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (as `avx`'s existence shows).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn walk_packet_avx<V: Visitor<T>>(
+        &self,
+        avx: lanes::Avx,
+        root: usize,
+        trs: &[&TraversalRay<T>; PACKET],
+        lanes: Lanes,
+        v: &mut [V; PACKET],
+        stack: &mut Vec<Entry<T>>,
+    ) {
+        self.walk_packet_in(avx, root, trs, lanes, v, stack);
+    }
+
+    /// [`KdTree::walk_packet`] in the lanes of `set`.
+    #[inline(always)]
+    fn walk_packet_in<L: LaneSet, V: Visitor<T>>(
+        &self,
+        set: L,
+        root: usize,
+        trs: &[&TraversalRay<T>; PACKET],
+        lanes: Lanes,
+        v: &mut [V; PACKET],
+        stack: &mut Vec<Entry<T>>,
+    ) {
         if self.reach.is_empty() {
-            self.walk_packet_with::<false, V>(root, trs, lanes, v, stack);
+            self.walk_packet_with::<false, L, V>(set, root, trs, lanes, v, stack);
         } else {
-            self.walk_packet_with::<true, V>(root, trs, lanes, v, stack);
+            self.walk_packet_with::<true, L, V>(set, root, trs, lanes, v, stack);
         }
     }
 
     /// The packet walk: the single walk's `FINITE` path
     /// (`KdTree::walk_with`), lane by lane, with the lanes that enter each
     /// node as a bit set.
-    #[inline]
-    fn walk_packet_with<const NARROW: bool, V: Visitor<T>>(
+    #[inline(always)]
+    fn walk_packet_with<const NARROW: bool, L: LaneSet, V: Visitor<T>>(
         &self,
+        set: L,
         root: usize,
         trs: &[&TraversalRay<T>; PACKET],
         lanes: Lanes,
@@ -368,7 +409,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         stack.clear();
         let (mut idx, mut mask) = (root, lanes);
         loop {
-            let live = at_or_before(&t0, &cutoff) & mask & !ended;
+            let live = set.at_or_before(&t0, &cutoff) & mask & !ended;
             if live != 0 {
                 let node = &self.nodes[idx];
                 if !node.is_leaf() {
@@ -390,7 +431,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                     } else {
                         &delta
                     };
-                    let c = cross(&rays, axis, delta, s, &t0, &t1);
+                    let c = set.cross(&rays, axis, delta, s, &t0, &t1);
                     let (near_t1, far_t0) = (c.near_t1, c.far_t0);
                     let (mut to_near, mut to_far) = (c.to_near, c.to_far);
                     to_near &= if near != 0 { live } else { 0 };
