@@ -89,18 +89,21 @@ impl<T: Real> TraversalRay<T> {
     /// written for `N` lanes side by side, which the compiler turns into
     /// vector instructions; only the rays that meet the bounds are then
     /// prepared further, one by one. A ray with a zero direction component
-    /// (an infinite wide reciprocal) takes `with_wide_hits` itself.
+    /// (an infinite wide reciprocal) takes `with_wide_hits` itself. Lane
+    /// `l` of `out` receives `rays[l]`'s traversal ray.
     #[inline]
-    #[must_use]
     pub fn lanes_with_wide_hits<const N: usize>(
         rays: [&Ray<T>; N],
         bounds: &Aabb<T>,
-    ) -> [Option<Self>; N] {
+        out: &mut [Option<Self>; N],
+    ) {
         if bounds.is_empty() {
-            return [None; N];
+            *out = [None; N];
+            return;
         }
         let b: Aabb<T::Wide> = bounds.cast();
         let zero = <T::Wide as Real>::ZERO;
+        let inf = <T::Wide as Real>::INFINITY;
         let (mut o, mut d) = ([[zero; N]; 3], [[zero; N]; 3]);
         for (l, ray) in rays.iter().enumerate() {
             for a in 0..3 {
@@ -109,27 +112,26 @@ impl<T: Real> TraversalRay<T> {
             }
         }
         let mut beam = [[zero; N]; 3];
-        let mut finite = [false; N];
+        let (mut finite, mut met) = ([false; N], [false; N]);
         for l in 0..N {
             let o = Vec3::new(o[0][l], o[1][l], o[2][l]);
             let inv = PreparedRay::reciprocal(Vec3::new(d[0][l], d[1][l], d[2][l]));
             let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
             let (t0, t1) = b.finite_slabs(o, inv, delta);
             (beam[0][l], beam[1][l], beam[2][l]) = (delta, t0, t1);
-            finite[l] = inv.is_finite();
+            // Without short circuits, so that the lanes stay side by side.
+            finite[l] = (inv.x.abs() < inf) & (inv.y.abs() < inf) & (inv.z.abs() < inf);
+            met[l] = t0 <= t1;
         }
-        let mut out = [None; N];
-        for (l, (ray, out)) in rays.iter().zip(&mut out).enumerate() {
-            let (delta, t0, t1) = (beam[0][l], beam[1][l], beam[2][l]);
+        for (l, (ray, out)) in rays.iter().zip(out).enumerate() {
             *out = if !finite[l] {
                 Self::with_wide_hits(ray, bounds)
-            } else if ray.is_empty_interval() || !(t0 <= t1) {
-                None
+            } else if met[l] && !ray.is_empty_interval() {
+                Self::from_wide_beam(ray, beam[0][l], beam[1][l], beam[2][l])
             } else {
-                Self::from_wide_beam(ray, delta, t0, t1)
+                None
             };
         }
-        out
     }
 
     /// The traversal ray of a wide beam of half-width `delta` entering the
@@ -411,7 +413,8 @@ mod tests {
         let rays: Vec<Ray<T>> = rays.iter().map(Ray::cast).collect();
         let bounds: Aabb<T> = bounds.cast();
         let members: [&Ray<T>; 8] = core::array::from_fn(|l| &rays[l]);
-        let lanes = TraversalRay::lanes_with_wide_hits(members, &bounds);
+        let mut lanes = [None; 8];
+        TraversalRay::lanes_with_wide_hits(members, &bounds, &mut lanes);
         for (ray, lane) in rays.iter().zip(&lanes) {
             let single = TraversalRay::with_wide_hits(ray, &bounds);
             proptest::prop_assert_eq!(

@@ -219,11 +219,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         // Unused lanes repeat the first ray, and are not in the set.
         let members: [&Ray<T>; PACKET] =
             core::array::from_fn(|l| &rays[*index.get(l).unwrap_or(&index[0])]);
-        *trs = if self.primitives().wide_hits() {
-            TraversalRay::lanes_with_wide_hits(members, bounds)
+        if self.primitives().wide_hits() {
+            TraversalRay::lanes_with_wide_hits(members, bounds, trs);
         } else {
-            members.map(|ray| TraversalRay::new(ray, bounds))
-        };
+            *trs = members.map(|ray| TraversalRay::new(ray, bounds));
+        }
         trs.iter()
             .enumerate()
             .fold(0, |m, (l, t)| m | (Lanes::from(t.is_some()) << l))
