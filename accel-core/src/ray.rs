@@ -100,6 +100,17 @@ impl<T: Real> Ray<T> {
     /// [`QueryError::NanInterval`].
     #[inline]
     pub fn validate(&self) -> Result<(), QueryError> {
+        if self.is_valid() {
+            Ok(())
+        } else {
+            self.check_one_by_one()
+        }
+    }
+
+    /// [`Ray::validate`]'s checks one by one, in order, naming the first
+    /// that fails.
+    #[cold]
+    fn check_one_by_one(&self) -> Result<(), QueryError> {
         if !self.origin.is_finite() {
             return Err(QueryError::NonFiniteOrigin);
         }
@@ -120,6 +131,25 @@ impl<T: Real> Ray<T> {
             return Err(QueryError::NanInterval);
         }
         Ok(())
+    }
+
+    /// Whether [`Ray::validate`] accepts the ray: every check at once,
+    /// without a branch (the common case's path; `validate` then names the
+    /// check that fails). An origin within [`Real::LIMIT`] is finite.
+    #[inline]
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        let (o, d) = (self.origin.abs(), self.direction.abs());
+        let (limit, zero) = (T::LIMIT, T::ZERO);
+        (o.x <= limit)
+            & (o.y <= limit)
+            & (o.z <= limit)
+            & (d.x < T::INFINITY)
+            & (d.y < T::INFINITY)
+            & (d.z < T::INFINITY)
+            & ((d.x > zero) | (d.y > zero) | (d.z > zero))
+            & !self.t_min.is_nan()
+            & !self.t_max.is_nan()
     }
 
     /// True when `[t_min, t_max]` holds no value.
@@ -279,6 +309,63 @@ mod tests {
         let r = Ray::with_interval(o, d, 2.0, 1.0).unwrap();
         assert!(r.is_empty_interval());
         assert!(!Ray::new(o, d).unwrap().is_empty_interval());
+    }
+
+    /// A value that may make a ray invalid, or keep it valid: special,
+    /// huge, tiny or zero.
+    fn special() -> impl proptest::strategy::Strategy<Value = f64> {
+        use proptest::prelude::*;
+        prop_oneof![
+            Just(0.0),
+            Just(-0.0),
+            Just(f64::NAN),
+            Just(f64::INFINITY),
+            Just(f64::NEG_INFINITY),
+            Just(1e300),
+            Just(-1e80),
+            Just(1e-310),
+        ]
+    }
+
+    /// [`Ray::is_valid`] accepts exactly the rays that `validate`'s checks
+    /// one by one accept, in `T` (the ray built field by field, so that
+    /// invalid rays exist).
+    fn same_verdicts<T: Real>(c: &[f64]) {
+        let v = |i: usize| {
+            Vec3::new(
+                T::from_f64(c[i]),
+                T::from_f64(c[i + 1]),
+                T::from_f64(c[i + 2]),
+            )
+        };
+        let ray = Ray {
+            origin: v(0),
+            direction: v(3),
+            t_min: T::from_f64(c[6]),
+            t_max: T::from_f64(c[7]),
+        };
+        assert_eq!(ray.is_valid(), ray.check_one_by_one().is_ok(), "{ray:?}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2_000))]
+        /// Ordinary fields with up to two of them replaced by special
+        /// values (a zero direction needs all three of its components).
+        #[test]
+        fn the_fast_check_agrees_with_validate(
+            mut c in proptest::collection::vec(-1e3..1e3f64, 8),
+            swaps in proptest::collection::vec((0..8usize, special()), 0..3),
+            zero_direction in proptest::bool::weighted(0.1),
+        ) {
+            for (i, x) in swaps {
+                c[i] = x;
+            }
+            if zero_direction {
+                c[3..6].copy_from_slice(&[0.0, -0.0, 0.0]);
+            }
+            same_verdicts::<f32>(&c);
+            same_verdicts::<f64>(&c);
+        }
     }
 
     #[test]

@@ -134,7 +134,7 @@ fn flush<T: Real>(rays: &[Ray<T>], g: &mut Gathered, visit: &mut impl FnMut(Grou
     g.len = 0;
     for k in 0..gathered {
         let i = g.index[k];
-        if gathered >= MIN_PACKET && rays[i].validate().is_ok() {
+        if gathered >= MIN_PACKET && rays[i].is_valid() {
             g.index[g.len] = i;
             g.len += 1;
         } else {
