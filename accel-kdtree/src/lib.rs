@@ -61,9 +61,11 @@
 //! **Bundles.** The bundle queries walk rays of one direction octant as
 //! packets of eight (Wald, Slusallek, Benthin & Wagner, "Interactive
 //! rendering with coherent ray tracing", Eurographics 2001): one node fetch
-//! for the packet, each ray's plane band computed in SSE2 lanes with the
-//! single walk's own arithmetic, and each ray entering only the nodes its
-//! single walk enters, so every answer is the single query's, bit for bit.
+//! for the packet, each ray's plane band computed in SIMD lanes (AVX where
+//! the CPU has AVX2, else SSE2) with the single walk's own arithmetic, and
+//! each ray entering only the nodes its single walk enters, so every answer
+//! is the single query's, bit for bit. The lanes' rays are prepared side by
+//! side ([`accel_core::TraversalRay::lanes_with_wide_hits`]).
 //!
 //! ```
 //! use accel_core::{Accelerator, BruteForce, Ray, TriangleMesh, Vec3};
