@@ -388,8 +388,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P> + Sync> Accelerator<T>
 
     accel_core::ray_queries_from_walks!();
 
-    /// Packets of rays of one direction octant walked together
-    /// ([`crate::bundle`]), other rays one at a time.
+    /// Packets of rays of one direction octant walked together (the
+    /// crate's bundle docs), other rays one at a time.
     fn intersect_bundle(&self, rays: &[Ray<T>], out: &mut [Result<Option<Hit<T>>, QueryError>]) {
         self.nearest_bundle(rays, out);
     }
