@@ -108,15 +108,8 @@ impl Avx {
 impl LaneSet for Avx {
     #[inline(always)]
     fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
-        if let (Some(a), Some(b)) = (cast::<_, [f32; PACKET]>(a), cast(b)) {
-            // SAFETY: an `Avx` exists only where the CPU has AVX2.
-            return unsafe { avx_f32::at_or_before(a, b) };
-        }
-        if let (Some(a), Some(b)) = (cast::<_, [f64; PACKET]>(a), cast(b)) {
-            // SAFETY: an `Avx` exists only where the CPU has AVX2.
-            return unsafe { avx_f64::at_or_before(a, b) };
-        }
-        at_or_before(a, b)
+        // SAFETY: an `Avx` exists only where the CPU has AVX2.
+        unsafe { avx::at_or_before(a, b) }.unwrap_or_else(|| at_or_before(a, b))
     }
 
     #[inline(always)]
@@ -129,32 +122,9 @@ impl LaneSet for Avx {
         t0: &[T; PACKET],
         t1: &[T; PACKET],
     ) -> Crossing<T> {
-        let mut out = Crossing {
-            near_t1: [T::ZERO; PACKET],
-            far_t0: [T::ZERO; PACKET],
-            to_near: 0,
-            to_far: 0,
-        };
-        // The AVX lanes of `$t` where `T` is `$t`.
-        macro_rules! avx {
-            ($t:ty, $module:ident) => {
-                if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
-                    cast::<_, LaneRays<$t>>(rays),
-                    cast(delta),
-                    cast(&s),
-                    cast(t0),
-                    cast(t1),
-                    cast_mut::<_, Crossing<$t>>(&mut out),
-                ) {
-                    // SAFETY: an `Avx` exists only where the CPU has AVX2.
-                    unsafe { $module::cross(r, axis & 3, d, s, a, b, o) };
-                    return out;
-                }
-            };
-        }
-        avx!(f32, avx_f32);
-        avx!(f64, avx_f64);
-        cross(rays, axis, delta, s, t0, t1)
+        // SAFETY: an `Avx` exists only where the CPU has AVX2.
+        unsafe { avx::cross(rays, axis, delta, s, t0, t1) }
+            .unwrap_or_else(|| cross(rays, axis, delta, s, t0, t1))
     }
 }
 
@@ -162,15 +132,9 @@ impl LaneSet for Avx {
 #[inline(always)]
 fn at_or_before<T: Real>(a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
     #[cfg(target_arch = "x86_64")]
-    {
-        if let (Some(a), Some(b)) = (cast::<_, [f32; PACKET]>(a), cast(b)) {
-            // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-            return unsafe { sse_f32::at_or_before(a, b) };
-        }
-        if let (Some(a), Some(b)) = (cast::<_, [f64; PACKET]>(a), cast(b)) {
-            // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-            return unsafe { sse_f64::at_or_before(a, b) };
-        }
+    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
+    if let Some(m) = unsafe { sse::at_or_before(a, b) } {
+        return m;
     }
     (0..PACKET).fold(0, |m, l| m | (Lanes::from(a[l] <= b[l]) << l))
 }
@@ -186,36 +150,93 @@ fn cross<T: Real>(
     t1: &[T; PACKET],
 ) -> Crossing<T> {
     #[cfg(target_arch = "x86_64")]
-    {
-        let mut out = Crossing {
-            near_t1: [T::ZERO; PACKET],
-            far_t0: [T::ZERO; PACKET],
-            to_near: 0,
-            to_far: 0,
-        };
-        // The SSE2 lanes of `$t` where `T` is `$t`.
-        macro_rules! sse {
-            ($t:ty, $module:ident) => {
-                if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
-                    cast::<_, LaneRays<$t>>(rays),
-                    cast(delta),
-                    cast(&s),
-                    cast(t0),
-                    cast(t1),
-                    cast_mut::<_, Crossing<$t>>(&mut out),
-                ) {
-                    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU
-                    // has it.
-                    unsafe { $module::cross(r, axis & 3, d, s, a, b, o) };
-                    return out;
-                }
-            };
-        }
-        sse!(f32, sse_f32);
-        sse!(f64, sse_f64);
+    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
+    if let Some(c) = unsafe { sse::cross(rays, axis, delta, s, t0, t1) } {
+        return c;
     }
     cross_portable(rays, axis & 3, delta, s, t0, t1)
 }
+
+/// One instruction set's lanes behind the generic `T`: `$f32` where `T` is
+/// `f32`, `$f64` where it is `f64` (the type check is decided when
+/// compiling), `None` otherwise.
+#[cfg(target_arch = "x86_64")]
+macro_rules! typed_lanes {
+    ($module:ident, $doc:literal, $f32:ident, $f64:ident) => {
+        #[doc = $doc]
+        mod $module {
+            use super::{Crossing, LaneRays, Lanes, PACKET, cast, cast_mut};
+            use accel_core::Real;
+
+            /// [`super::at_or_before`] in this set.
+            ///
+            /// # Safety
+            /// The CPU has this module's instruction set.
+            #[inline(always)]
+            pub(super) unsafe fn at_or_before<T: Real>(
+                a: &[T; PACKET],
+                b: &[T; PACKET],
+            ) -> Option<Lanes> {
+                if let (Some(a), Some(b)) = (cast::<_, [f32; PACKET]>(a), cast(b)) {
+                    // SAFETY: the caller's promise.
+                    return Some(unsafe { super::$f32::at_or_before(a, b) });
+                }
+                if let (Some(a), Some(b)) = (cast::<_, [f64; PACKET]>(a), cast(b)) {
+                    // SAFETY: the caller's promise.
+                    return Some(unsafe { super::$f64::at_or_before(a, b) });
+                }
+                None
+            }
+
+            /// [`super::cross`] in this set.
+            ///
+            /// # Safety
+            /// The CPU has this module's instruction set.
+            #[inline(always)]
+            pub(super) unsafe fn cross<T: Real>(
+                rays: &LaneRays<T>,
+                axis: usize,
+                delta: &[T; PACKET],
+                s: T,
+                t0: &[T; PACKET],
+                t1: &[T; PACKET],
+            ) -> Option<Crossing<T>> {
+                let mut out = Crossing {
+                    near_t1: [T::ZERO; PACKET],
+                    far_t0: [T::ZERO; PACKET],
+                    to_near: 0,
+                    to_far: 0,
+                };
+                // The lanes of `$t` (module `$lanes`) where `T` is `$t`.
+                macro_rules! typed {
+                    ($t:ty, $lanes:ident) => {
+                        if let (Some(r), Some(d), Some(&s), Some(a), Some(b), Some(o)) = (
+                            cast::<_, LaneRays<$t>>(rays),
+                            cast(delta),
+                            cast(&s),
+                            cast(t0),
+                            cast(t1),
+                            cast_mut::<_, Crossing<$t>>(&mut out),
+                        ) {
+                            // SAFETY: the caller's promise.
+                            unsafe { super::$lanes::cross(r, axis & 3, d, s, a, b, o) };
+                            return Some(out);
+                        }
+                    };
+                }
+                typed!(f32, $f32);
+                typed!(f64, $f64);
+                None
+            }
+        }
+    };
+}
+
+#[cfg(target_arch = "x86_64")]
+typed_lanes!(sse, "SSE2 lanes of `f32` or `f64`.", sse_f32, sse_f64);
+
+#[cfg(target_arch = "x86_64")]
+typed_lanes!(avx, "AVX lanes of `f32` or `f64`.", avx_f32, avx_f64);
 
 /// [`cross`] one lane at a time: the single walk's expressions.
 #[inline(always)]
