@@ -90,8 +90,9 @@ impl<T: Real> TraversalRay<T> {
     /// vector instructions; only the rays that meet the bounds are then
     /// prepared further, one by one. A ray with a zero direction component
     /// (an infinite wide reciprocal) takes `with_wide_hits` itself. Lane
-    /// `l` of `out` receives `rays[l]`'s traversal ray.
-    #[inline]
+    /// `l` of `out` receives `rays[l]`'s traversal ray. Always inlined, so
+    /// that a caller compiled for wider vectors (AVX2) gets them here too.
+    #[inline(always)]
     pub fn lanes_with_wide_hits<const N: usize>(
         rays: [&Ray<T>; N],
         bounds: &Aabb<T>,

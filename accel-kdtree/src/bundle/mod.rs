@@ -156,6 +156,89 @@ fn flush<T: Real>(rays: &[Ray<T>], g: &mut Gathered, visit: &mut impl FnMut(Grou
 /// [`STACK`] entries).
 type Entry<T> = (u32, Lanes, [T; PACKET], [T; PACKET]);
 
+/// What a bundle asks of each of its rays: its nearest hit ([`NearestHits`])
+/// or whether it hits anything ([`AnyHits`]), for a packet in the lanes of
+/// a [`LaneSet`] and for a ray that goes alone.
+trait Query<T: Real>: Copy {
+    /// One ray's answer.
+    type Answer: Copy;
+
+    /// The answers of a packet's rays (`index` into `rays`).
+    fn packet<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, L: LaneSet>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        set: L,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Self::Answer; PACKET];
+
+    /// The answer of a ray alone.
+    fn single<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        ray: &Ray<T>,
+    ) -> Result<Self::Answer, QueryError>;
+}
+
+/// [`Query`] for the nearest hits.
+#[derive(Clone, Copy)]
+struct NearestHits;
+
+impl<T: Real> Query<T> for NearestHits {
+    type Answer = Option<Hit<T>>;
+
+    #[inline(always)]
+    fn packet<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, L: LaneSet>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        set: L,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Self::Answer; PACKET] {
+        tree.nearest_packet(set, rays, index, stack)
+    }
+
+    #[inline(always)]
+    fn single<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        ray: &Ray<T>,
+    ) -> Result<Self::Answer, QueryError> {
+        tree.nearest(ray, &mut ())
+    }
+}
+
+/// [`Query`] for whether anything is hit.
+#[derive(Clone, Copy)]
+struct AnyHits;
+
+impl<T: Real> Query<T> for AnyHits {
+    type Answer = bool;
+
+    #[inline(always)]
+    fn packet<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, L: LaneSet>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        set: L,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Self::Answer; PACKET] {
+        tree.any_packet(set, rays, index, stack)
+    }
+
+    #[inline(always)]
+    fn single<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
+        self,
+        tree: &KdTree<'_, T, P, S>,
+        ray: &Ray<T>,
+    ) -> Result<Self::Answer, QueryError> {
+        tree.any(ray, &mut ())
+    }
+}
+
 impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     /// [`accel_core::Accelerator::intersect_bundle`]: packets of one octant,
     /// other rays one at a time.
@@ -164,51 +247,79 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         rays: &[Ray<T>],
         out: &mut [Result<Option<Hit<T>>, QueryError>],
     ) {
-        self.by_packets(
-            rays,
-            out,
-            |index, stack| self.nearest_packet(rays, index, stack),
-            |ray| self.nearest(ray, &mut ()),
-        );
+        self.bundle(NearestHits, rays, out);
     }
 
     /// [`accel_core::Accelerator::occluded_bundle`], as
     /// [`KdTree::nearest_bundle`].
     pub(crate) fn any_bundle(&self, rays: &[Ray<T>], out: &mut [Result<bool, QueryError>]) {
-        self.by_packets(
-            rays,
-            out,
-            |index, stack| self.any_packet(rays, index, stack),
-            |ray| self.any(ray, &mut ()),
-        );
+        self.bundle(AnyHits, rays, out);
     }
 
-    /// Answers a bundle: `out[i]` for the ray `rays[i]`, by `packet` for the
-    /// packets of [`by_octant`] (with a stack their walks share), by `single`
-    /// for the rays that go alone.
-    #[inline(always)]
-    fn by_packets<A>(
+    /// Answers a bundle's `query`: `out[i]` for the ray `rays[i]`, by
+    /// packets for the packets of [`by_octant`] (with a stack their walks
+    /// share), alone for the other rays.
+    fn bundle<Q: Query<T>>(
         &self,
+        query: Q,
         rays: &[Ray<T>],
-        out: &mut [Result<A, QueryError>],
-        packet: impl Fn(&[usize], &mut Vec<Entry<T>>) -> [A; PACKET],
-        single: impl Fn(&Ray<T>) -> Result<A, QueryError>,
+        out: &mut [Result<Q::Answer, QueryError>],
     ) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
         let mut stack = Vec::with_capacity(STACK);
         by_octant(rays, |group| match group {
             Group::Packet(index) => {
-                for (&i, answer) in index.iter().zip(packet(index, &mut stack)) {
+                for (&i, answer) in index
+                    .iter()
+                    .zip(self.packet(query, rays, index, &mut stack))
+                {
                     out[i] = Ok(answer);
                 }
             }
-            Group::Single(i) => out[i] = single(&rays[i]),
+            Group::Single(i) => out[i] = query.single(self, &rays[i]),
         });
+    }
+
+    /// A packet's answers to `query`, in AVX lanes where the CPU has AVX2,
+    /// else in the baseline's.
+    fn packet<Q: Query<T>>(
+        &self,
+        query: Q,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Q::Answer; PACKET] {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = lanes::Avx::detect() {
+            // SAFETY: an `Avx` exists only where the CPU has AVX2.
+            return unsafe { self.packet_avx(avx, query, rays, index, stack) };
+        }
+        query.packet(self, Baseline, rays, index, stack)
+    }
+
+    /// [`KdTree::packet`] compiled for AVX2: the AVX lanes' intrinsics
+    /// inline into the walk, and the rays' preparation side by side is
+    /// vectorised for AVX's width.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (as `avx`'s existence shows).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn packet_avx<Q: Query<T>>(
+        &self,
+        avx: lanes::Avx,
+        query: Q,
+        rays: &[Ray<T>],
+        index: &[usize],
+        stack: &mut Vec<Entry<T>>,
+    ) -> [Q::Answer; PACKET] {
+        query.packet(self, avx, rays, index, stack)
     }
 
     /// The traversal rays of the packet's rays (`index` into `rays`) through
     /// a part with `bounds`, prepared side by side into `trs`; returns the
     /// lanes whose beam meets the part.
+    #[inline(always)]
     fn packet_rays(
         &self,
         rays: &[Ray<T>],
@@ -244,8 +355,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
 
     /// The nearest hit of each ray of a packet, part by part as
     /// [`KdTree::nearest`].
-    fn nearest_packet(
+    #[inline(always)]
+    fn nearest_packet<L: LaneSet>(
         &self,
+        set: L,
         rays: &[Ray<T>],
         index: &[usize],
         stack: &mut Vec<Entry<T>>,
@@ -265,7 +378,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                 mailbox: Mailbox::new(),
                 best: best[l],
             });
-            self.walk_packet(part.root, &trs, lanes, &mut v, stack);
+            self.walk_packet(set, part.root, &trs, lanes, &mut v, stack);
             for (b, v) in best.iter_mut().zip(&v) {
                 *b = v.best;
             }
@@ -275,8 +388,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
 
     /// Whether each ray of a packet hits anything, part by part as
     /// [`KdTree::any`].
-    fn any_packet(
+    #[inline(always)]
+    fn any_packet<L: LaneSet>(
         &self,
+        set: L,
         rays: &[Ray<T>],
         index: &[usize],
         stack: &mut Vec<Entry<T>>,
@@ -297,7 +412,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                 mailbox: Mailbox::new(),
                 found: false,
             });
-            self.walk_packet(part.root, &trs, lanes & open, &mut v, stack);
+            self.walk_packet(set, part.root, &trs, lanes & open, &mut v, stack);
             for (l, v) in v.iter().enumerate() {
                 if v.found {
                     found[l] = true;
@@ -311,48 +426,10 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         found
     }
 
-    /// Walks a packet, narrowing each ray's beam per node where the tree
-    /// says it pays (as [`KdTree::walk`]), in AVX lanes where the CPU has
-    /// AVX2, else in the baseline's.
-    fn walk_packet<V: Visitor<T>>(
-        &self,
-        root: usize,
-        trs: &[&TraversalRay<T>; PACKET],
-        lanes: Lanes,
-        v: &mut [V; PACKET],
-        stack: &mut Vec<Entry<T>>,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = lanes::Avx::detect() {
-            // SAFETY: an `Avx` exists only where the CPU has AVX2.
-            unsafe { self.walk_packet_avx(avx, root, trs, lanes, v, stack) };
-            return;
-        }
-        self.walk_packet_in(Baseline, root, trs, lanes, v, stack);
-    }
-
-    /// [`KdTree::walk_packet`] compiled for AVX2, so that the AVX lanes'
-    /// intrinsics inline into the walk.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 (as `avx`'s existence shows).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn walk_packet_avx<V: Visitor<T>>(
-        &self,
-        avx: lanes::Avx,
-        root: usize,
-        trs: &[&TraversalRay<T>; PACKET],
-        lanes: Lanes,
-        v: &mut [V; PACKET],
-        stack: &mut Vec<Entry<T>>,
-    ) {
-        self.walk_packet_in(avx, root, trs, lanes, v, stack);
-    }
-
-    /// [`KdTree::walk_packet`] in the lanes of `set`.
+    /// Walks a packet in the lanes of `set`, narrowing each ray's beam per
+    /// node where the tree says it pays (as [`KdTree::walk`]).
     #[inline(always)]
-    fn walk_packet_in<L: LaneSet, V: Visitor<T>>(
+    fn walk_packet<L: LaneSet, V: Visitor<T>>(
         &self,
         set: L,
         root: usize,
