@@ -102,21 +102,38 @@ impl Camera {
     }
 }
 
+/// The pixels `(x, y)` of a `width × height` tile in Z order (Morton
+/// order: the bits of `x` and `y` interleaved, `x`'s lowest first). Every
+/// run of 2²ᵏ or 2²ᵏ⁺¹ pixels from a multiple of its length is a square or
+/// a 2:1 block (eight pixels: 4 × 2), so a bundle's consecutive rays, which
+/// a structure walks together as packets, are as close as a run of their
+/// number can be. A tile whose sides are not powers of two skips the codes
+/// beyond its sides.
+pub fn z_order(width: usize, height: usize) -> impl Iterator<Item = (usize, usize)> {
+    let side = width.max(height).next_power_of_two();
+    // The bits of `code` at even (or odd) positions, packed.
+    let spread =
+        |code: usize| (0..usize::BITS / 2).fold(0, |v, b| v | ((code >> (2 * b)) & 1) << b);
+    (0..side * side)
+        .map(move |code| (spread(code), spread(code >> 1)))
+        .filter(move |&(x, y)| x < width && y < height)
+}
+
 /// `items` of an image `width` wide, row by row, reordered tile by tile
-/// (`tile` × `tile` pixels, row by row within a tile; the tiles of the
-/// last rows and columns cut short).
+/// (`tile` × `tile` pixels, tiles row by row; within a tile in
+/// [`z_order`]; the tiles of the last rows and columns cut short).
 #[must_use]
 pub fn by_tiles<T: Copy>(items: &[T], width: usize, tile: usize) -> Vec<T> {
     let width = width.max(1);
+    let tile = tile.max(1);
     let height = items.len().div_ceil(width);
     let mut out = Vec::with_capacity(items.len());
     for ty in (0..height).step_by(tile) {
         for tx in (0..width).step_by(tile) {
-            for y in ty..(ty + tile).min(height) {
-                for x in tx..(tx + tile).min(width) {
-                    if let Some(&item) = items.get(y * width + x) {
-                        out.push(item);
-                    }
+            let (w, h) = (tile.min(width - tx), tile.min(height - ty));
+            for (x, y) in z_order(w, h) {
+                if let Some(&item) = items.get((ty + y) * width + tx + x) {
+                    out.push(item);
                 }
             }
         }
@@ -131,13 +148,58 @@ mod tests {
     use accel_core::{Accelerator, BruteForce};
 
     #[test]
+    fn z_order_visits_blocks_of_four_by_two() {
+        // An 8 × 8 tile: each run of eight is a 4 × 2 block, each run of
+        // sixteen a 4 × 4 block, and every pixel comes once.
+        let z: Vec<(usize, usize)> = z_order(8, 8).collect();
+        assert_eq!(
+            &z[..8],
+            &[
+                (0, 0),
+                (1, 0),
+                (0, 1),
+                (1, 1),
+                (2, 0),
+                (3, 0),
+                (2, 1),
+                (3, 1)
+            ]
+        );
+        for (run, block) in z.chunks(8).enumerate() {
+            let (x0, y0) = (block[0].0, block[0].1);
+            assert!(x0 % 4 == 0 && y0 % 2 == 0, "run {run} starts at {x0}, {y0}");
+            assert!(
+                block
+                    .iter()
+                    .all(|&(x, y)| (x0..x0 + 4).contains(&x) && (y0..y0 + 2).contains(&y))
+            );
+        }
+        for block in z.chunks(16) {
+            let (x0, y0) = block[0];
+            assert!(
+                block
+                    .iter()
+                    .all(|&(x, y)| (x0..x0 + 4).contains(&x) && (y0..y0 + 4).contains(&y))
+            );
+        }
+        let mut sorted = z.clone();
+        sorted.sort_unstable();
+        let all: Vec<(usize, usize)> = (0..8).flat_map(|x| (0..8).map(move |y| (x, y))).collect();
+        assert_eq!(sorted, all);
+        // A cut tile keeps the order of the pixels it has.
+        let cut: Vec<(usize, usize)> = z_order(3, 2).collect();
+        assert_eq!(cut, [(0, 0), (1, 0), (0, 1), (1, 1), (2, 0), (2, 1)]);
+    }
+
+    #[test]
     fn tiles_cover_the_image_once_in_tile_order() {
         let pixels: Vec<u32> = (0..30).collect();
         let tiled = by_tiles(&pixels, 10, 4);
-        // Three rows: tiles of 4 × 3, 4 × 3 and the last 2 × 3.
-        let want: Vec<u32> = [0, 1, 2, 3, 10, 11, 12, 13, 20, 21, 22, 23]
+        // Three rows: tiles of 4 × 3, 4 × 3 and the last 2 × 3, each in Z
+        // order (2 × 2 blocks, then the cut ones).
+        let want: Vec<u32> = [0, 1, 10, 11, 2, 3, 12, 13, 20, 21, 22, 23]
             .into_iter()
-            .chain([4, 5, 6, 7, 14, 15, 16, 17, 24, 25, 26, 27])
+            .chain([4, 5, 14, 15, 6, 7, 16, 17, 24, 25, 26, 27])
             .chain([8, 9, 18, 19, 28, 29])
             .collect();
         assert_eq!(tiled, want);

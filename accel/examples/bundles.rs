@@ -1,5 +1,5 @@
 //! Traces a scene's rays one at a time and in bundles of 64 (an image's
-//! rays by 8 × 8 tiles), through any accelerator, and prints both
+//! rays by 8 × 8 tiles, in Z order within a tile), through any accelerator, and prints both
 //! throughputs on this thread for the nearest-hit and the any-hit query (a
 //! driver for profilers and for quick comparisons; `render bench` is the
 //! benchmark). Bundle answers are checked against the single ones

@@ -753,12 +753,13 @@ mod tests {
             rays,
             image_width: Some(10),
         };
-        // Two rows of 10: a tile of 8 × 2, then the last 2 × 2.
+        // Two rows of 10: a tile of 8 × 2, then the last 2 × 2, each in Z
+        // order (2 × 2 blocks).
         let order = set.bundle_order(&indices);
-        assert_eq!(order[..10], [0, 1, 2, 3, 4, 5, 6, 7, 10, 11]);
+        assert_eq!(order[..10], [0, 1, 10, 11, 2, 3, 12, 13, 4, 5]);
         assert_eq!(order[16..], [8, 9, 18, 19]);
         let bundled = set.bundle_order(&set.rays);
-        assert_eq!(bundled[8].origin.x, 10.0);
+        assert_eq!(bundled[2].origin.x, 10.0);
         set.image_width = None;
         assert_eq!(*set.bundle_order(&indices), *indices);
     }

@@ -3,11 +3,12 @@
 //! [`accel_core::Accelerator::intersect_bundle`] call, then their shadow rays and their
 //! ambient-occlusion rays by one [`accel_core::Accelerator::occluded_bundle`] call each.
 //!
-//! A block's camera rays are a coherent packet, which a structure with
-//! packet traversal (the grid's, [`accel::Grid`]) walks together; the
-//! shadow rays of neighbouring hits converge on the light and stay fairly
-//! coherent; the ambient-occlusion rays do not, and a structure answers
-//! them one at a time, as it would alone.
+//! A block's camera rays, in Z order ([`accel_scenes::camera::z_order`]:
+//! runs of eight are 4 × 2 pixels), are coherent packets, which a
+//! structure with packet traversal (the grid's, the kD-tree's) walks
+//! together; the shadow rays of neighbouring hits converge on the light
+//! and stay fairly coherent; the ambient-occlusion rays do not, and a
+//! structure answers them one at a time, as it would alone.
 //!
 //! Every pixel is the one [`Shader::pixel`] shades, bit for bit, and so is
 //! its tally and digest: a pixel draws its random numbers from its own
@@ -184,7 +185,13 @@ impl<T: Real> Shader<'_, T> {
         b: &mut Bundles<T>,
     ) {
         b.clear();
-        for (slot, (x, y)) in block.pixels().enumerate() {
+        // In Z order, so that a structure's packets (runs of the bundle)
+        // are compact blocks of pixels.
+        let (w, h) = (block.width() as usize, block.height() as usize);
+        let z = accel_scenes::camera::z_order(w, h);
+        for (slot, (x, y)) in
+            z.map(|(x, y)| (y * w + x, (block.x0 + x as u32, block.y0 + y as u32)))
+        {
             if !wanted(x, y) || slots[slot].error.is_some() {
                 continue;
             }
