@@ -113,7 +113,8 @@ pub const RAY_GENERATOR: AccelKind = AccelKind::KdTree;
 
 /// Generates the primary, shadow and diffuse sets for `view`, using `accel`
 /// for the primary hits (every accelerator gives the same ones), with
-/// secondary rays spawned by the error-bound offset.
+/// secondary rays spawned by the error-bound offset, their pixels taken
+/// tile by tile ([`by_tiles`]).
 ///
 /// # Errors
 /// A [`QueryError`] if a ray is not valid in this precision.
@@ -160,8 +161,13 @@ pub fn generate_rays_from<T: Real>(
     let mut diffuse = Vec::new();
     let mut shadow_sources = Vec::new();
     let mut diffuse_sources = Vec::new();
-    for (i, (ray, hit)) in primary.iter().zip(&hits).enumerate() {
-        let Some(hit) = hit else { continue };
+    // The secondary rays of the hits tile by tile (by_tiles's order), as a
+    // renderer spawns them: a bundle of them holds neighbouring pixels'.
+    let pixels: Vec<usize> = (0..primary.len()).collect();
+    for i in by_tiles(&pixels, width as usize, TILE) {
+        let (ray, Some(hit)) = (&primary[i], &hits[i]) else {
+            continue;
+        };
         let s = spawn(mesh, ray, hit, offset);
         let to_light = view.light - s.origin;
         if s.normal.dot(to_light) > 0.0 {
@@ -781,6 +787,23 @@ mod tests {
         // The floor fills the lower part of the view, the sky the top.
         assert!(hits > 0 && hits < 24 * 16, "{hits}");
         assert_eq!(sets[2].rays.len(), hits);
+        // One diffuse ray per hit, leaving the hit point, the hits taken
+        // tile by tile.
+        let tiled = by_tiles(&sets[0].rays, 24, TILE);
+        let points: Vec<_> = tiled
+            .iter()
+            .filter_map(|r| {
+                grid.intersect(r)
+                    .unwrap()
+                    .map(|h| r.origin + r.direction * h.t)
+            })
+            .collect();
+        for (d, p) in sets[2].rays.iter().zip(&points) {
+            assert!(
+                (d.origin - *p).length() <= 1e-3 * (1.0 + p.length()),
+                "{d:?} leaves {p:?}"
+            );
+        }
         assert!(sets[1].rays.len() <= hits && !sets[1].rays.is_empty());
         assert!(sets[1].rays.iter().all(|r| r.t_max == 1.0));
     }

@@ -888,7 +888,7 @@ fn throughput_lines(report: &PeersReport, kinds: &[RayKind], out: &mut Vec<Strin
             .to_owned(),
     );
     out.push(format!(
-        "  Embree through its rtcIntersect/rtcOccluded packets; camera rays by {t} x {t} tiles; -: no packet queries",
+        "  Embree through its rtcIntersect/rtcOccluded packets; camera rays by {t} x {t} tiles in Z order; -: no packet queries",
         t = bench::TILE
     ));
 }
