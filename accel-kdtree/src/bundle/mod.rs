@@ -156,6 +156,10 @@ fn flush<T: Real>(rays: &[Ray<T>], g: &mut Gathered, visit: &mut impl FnMut(Grou
 /// [`STACK`] entries).
 type Entry<T> = (u32, Lanes, [T; PACKET], [T; PACKET]);
 
+/// A packet walk's stack: entries at strictly increasing depths, so at most
+/// [`STACK`] (the trees' depth limit).
+type Stack<T> = [Entry<T>; STACK];
+
 /// What a bundle asks of each of its rays: its nearest hit ([`NearestHits`])
 /// or whether it hits anything ([`AnyHits`]), for a packet in the lanes of
 /// a [`LaneSet`] and for a ray that goes alone.
@@ -170,7 +174,7 @@ trait Query<T: Real>: Copy {
         set: L,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET];
 
     /// The answer of a ray alone.
@@ -195,7 +199,7 @@ impl<T: Real> Query<T> for NearestHits {
         set: L,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET] {
         tree.nearest_packet(set, rays, index, stack)
     }
@@ -224,7 +228,7 @@ impl<T: Real> Query<T> for AnyHits {
         set: L,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET] {
         tree.any_packet(set, rays, index, stack)
     }
@@ -266,7 +270,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         out: &mut [Result<Q::Answer, QueryError>],
     ) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        let mut stack = Vec::with_capacity(STACK);
+        let mut stack = [(0, 0, [T::ZERO; PACKET], [T::ZERO; PACKET]); STACK];
         by_octant(rays, |group| match group {
             Group::Packet(index) => {
                 for (&i, answer) in index
@@ -287,7 +291,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         query: Q,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Q::Answer; PACKET] {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = lanes::Avx::detect() {
@@ -311,7 +315,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         query: Q,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Q::Answer; PACKET] {
         query.packet(self, avx, rays, index, stack)
     }
@@ -361,7 +365,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         set: L,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [Option<Hit<T>>; PACKET] {
         let mut best = [None; PACKET];
         let mut trs = [None; PACKET];
@@ -394,7 +398,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         set: L,
         rays: &[Ray<T>],
         index: &[usize],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) -> [bool; PACKET] {
         let mut found = [false; PACKET];
         let mut open = first_lanes(index.len());
@@ -436,7 +440,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         trs: &[&TraversalRay<T>; PACKET],
         lanes: Lanes,
         v: &mut [V; PACKET],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) {
         if self.reach.is_empty() {
             self.walk_packet_with::<false, L, V>(set, root, trs, lanes, v, stack);
@@ -456,7 +460,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         trs: &[&TraversalRay<T>; PACKET],
         lanes: Lanes,
         v: &mut [V; PACKET],
-        stack: &mut Vec<Entry<T>>,
+        stack: &mut Stack<T>,
     ) {
         // Per-axis values indexed by `axis & 3`, as in the single walk (the
         // fourth row is never read).
@@ -483,7 +487,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         let mut cutoff: [T; PACKET] = core::array::from_fn(|l| v[l].cutoff());
         // Lanes whose walk has ended (an any-hit query that found one).
         let mut ended: Lanes = 0;
-        stack.clear();
+        let mut sp = 0;
         let (mut idx, mut mask) = (root, lanes);
         loop {
             let live = set.at_or_before(&t0, &cutoff) & mask & !ended;
@@ -514,9 +518,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                     to_near &= if near != 0 { live } else { 0 };
                     to_far &= if far != 0 { live } else { 0 };
                     if to_near != 0 {
-                        if to_far != 0 {
-                            stack.push((far as u32, to_far, far_t0, t1));
-                        }
+                        // Written always, kept only when the far child is
+                        // entered (no branch to mispredict); `sp < STACK`
+                        // here, as in the single walk.
+                        stack[sp] = (far as u32, to_far, far_t0, t1);
+                        sp += usize::from(to_far != 0);
                         (idx, mask, t1) = (near, to_near, near_t1);
                         continue;
                     }
@@ -541,9 +547,11 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                     }
                 }
             }
-            let Some((i, m, a, b)) = stack.pop() else {
+            if sp == 0 {
                 return;
-            };
+            }
+            sp -= 1;
+            let (i, m, a, b) = stack[sp];
             (idx, mask, t0, t1) = (i as usize, m, a, b);
         }
     }
