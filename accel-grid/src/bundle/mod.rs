@@ -68,6 +68,14 @@ const SPREAD_PAIRS: usize = 1024;
 /// spread and still be walked together.
 pub const COHERENT_CELLS: f64 = 8.0;
 
+/// The rays of a packet too spread to walk together are tried in runs of
+/// this many slots (a 4 × 4 block of a tile in Z order), each walked
+/// together where it is coherent.
+pub const SUB_PACKET: usize = 16;
+
+/// The fewest rays of a run of [`SUB_PACKET`] slots walked together.
+pub const MIN_SUB_PACKET: usize = 8;
+
 /// A bundle cut into runs of up to [`PACKET`] rays: each run's first index
 /// in the bundle, its rays, and whether enough of them ([`MIN_PACKET`])
 /// head within the angle of [`HEADING_COS`] of its first ray to try a
@@ -363,9 +371,11 @@ impl<T: Real> Packet<T> {
     /// as the single walk (`single`, on a ray's beam through `root`'s box)
     /// answers each: `answer(i, …)` is called once for each ray `rays[i]`,
     /// with its nearest hit, or (if `ANY`) whether it hits anything, or the
-    /// error that refuses it. Packets of fewer than [`MIN_PACKET`] rays,
-    /// or whose rays spread over more than [`COHERENT_CELLS`] cells of
-    /// `root`, go one ray at a time.
+    /// error that refuses it. Packets of fewer than [`MIN_PACKET`] rays go
+    /// one ray at a time; those whose rays spread over more than
+    /// [`COHERENT_CELLS`] cells of `root` are walked by the runs of
+    /// [`SUB_PACKET`] rays that do not (`walk_coherent`), their
+    /// other rays one at a time.
     pub fn answer<const ANY: bool, G: SliceCells<T> + ?Sized>(
         root: &G,
         rays: &[Ray<T>],
@@ -385,25 +395,53 @@ impl<T: Real> Packet<T> {
         let Some(mut packet) = formed else {
             return;
         };
-        if packet.members.len() < MIN_PACKET
-            || !coherent(&packet.members, root.geometry(), packet.axes)
-        {
-            for m in &packet.members {
-                answer(m.slot, Ok(single(&m.tr)));
-            }
-            return;
-        }
-        packet.walk(root, u64::MAX >> (64 - packet.members.len()));
+        let walked = packet.walk_coherent(root);
         for (i, m) in packet.members.iter().enumerate() {
             answer(
                 m.slot,
-                Ok(if ANY {
+                Ok(if walked & (1 << i) == 0 {
+                    single(&m.tr)
+                } else if ANY {
                     Answer::Any(packet.finished & (1 << i) != 0)
                 } else {
                     Answer::Nearest(m.best)
                 }),
             );
         }
+    }
+
+    /// Walks `root` with the members whose rays stay close enough together
+    /// ([`coherent`]): all of them if they do, else each run of
+    /// [`SUB_PACKET`] consecutive slots (in a tile in Z order, a 4 × 4
+    /// block of pixels) whose members do, if there are [`MIN_PACKET`] or
+    /// [`MIN_SUB_PACKET`] of them; returns the members walked, a bit each.
+    fn walk_coherent<G: SliceCells<T> + ?Sized>(&mut self, root: &G) -> u64 {
+        let n = self.members.len();
+        if n < MIN_PACKET {
+            return 0;
+        }
+        let (geom, axes) = (root.geometry(), self.axes);
+        let runs = |lo: usize, hi: usize| (u64::MAX >> (64 - (hi - lo))) << lo;
+        if coherent(&self.members, geom, axes) {
+            self.walk(root, runs(0, n));
+            return runs(0, n);
+        }
+        let mut walked = 0;
+        let mut lo = 0;
+        while lo < n {
+            let run = self.members[lo].slot / SUB_PACKET;
+            let hi = lo
+                + self.members[lo..]
+                    .iter()
+                    .take_while(|m| m.slot / SUB_PACKET == run)
+                    .count();
+            if hi - lo >= MIN_SUB_PACKET && coherent(&self.members[lo..hi], geom, axes) {
+                self.walk(root, runs(lo, hi));
+                walked |= runs(lo, hi);
+            }
+            lo = hi;
+        }
+        walked
     }
 
     /// Walks the slices of `grid` with the members of `mask` (a bit per

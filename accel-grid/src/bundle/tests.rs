@@ -1,9 +1,10 @@
-//! The two ways a slice marks which members meet which full cells agree.
+//! The two ways a slice marks which members meet which full cells agree;
+//! a packet too spread to walk whole walks its coherent runs.
 
 use super::part::PartCells;
 use super::*;
 use crate::Grid;
-use accel_core::{TriangleMesh, Vec3};
+use accel_core::{Accelerator, TriangleMesh, Vec3};
 use accel_scenes::generated::{SplitMix64, random_soup};
 
 /// Fans of 64 rays through a dense soup: in every slice of the main axis,
@@ -62,4 +63,37 @@ fn spread_and_cull_mark_the_same_members() {
         slices > 100 && marked > 10_000,
         "{slices} slices, {marked} marks"
     );
+}
+
+/// A packet whose rays spread over the whole grid, in four runs of
+/// [`SUB_PACKET`] rays that each stay together (the 4 × 4 blocks of a tile
+/// in Z order), is walked run by run rather than one ray at a time, and
+/// each ray still gets its single walk's nearest hit.
+#[test]
+fn a_spread_packet_walks_its_coherent_runs() {
+    let mesh: TriangleMesh<f32> = random_soup(20_000, 7).cast().unwrap();
+    let grid = Grid::new(&mesh).unwrap();
+    let part = &grid.first;
+    let cells = PartCells::<f32, _, false> { part, prims: &mesh };
+    let origin = Vec3::new(0.5, 0.5, -2.0);
+    let rays: Vec<Ray<f32>> = (0..4 * SUB_PACKET)
+        .map(|i| {
+            let (run, j) = (i / SUB_PACKET, i % SUB_PACKET);
+            let corner = |r: usize| 0.2 + 0.6 * r as f64;
+            let aim = Vec3::new(corner(run % 2), corner(run / 2), 1.0);
+            let fan = Vec3::new(1e-3 * (j % 4) as f64, 1e-3 * (j / 4) as f64, 0.0);
+            Ray::new(origin, aim - origin + fan).unwrap().cast()
+        })
+        .collect();
+    let mut packet = Packet::form(&rays, part.geometry.bounds(), |_, _| {}).unwrap();
+    assert_eq!(packet.members.len(), rays.len());
+    assert!(!coherent(&packet.members, &part.geometry, packet.axes));
+    assert_eq!(packet.walk_coherent(&cells), u64::MAX, "every run walked");
+    let mut hits = 0;
+    for m in &packet.members {
+        let single = grid.intersect(&rays[m.slot]).unwrap();
+        assert_eq!(m.best, single, "ray {}", m.slot);
+        hits += usize::from(single.is_some());
+    }
+    assert!(hits > 32, "{hits} rays hit the soup");
 }
