@@ -72,7 +72,12 @@ pub(crate) struct Baseline;
 impl LaneSet for Baseline {
     #[inline(always)]
     fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
-        at_or_before(a, b)
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
+        if let Some(m) = unsafe { sse::at_or_before(a, b) } {
+            return m;
+        }
+        (0..PACKET).fold(0, |m, l| m | (Lanes::from(a[l] <= b[l]) << l))
     }
 
     #[inline(always)]
@@ -85,7 +90,12 @@ impl LaneSet for Baseline {
         t0: &[T; PACKET],
         t1: &[T; PACKET],
     ) -> Crossing<T> {
-        cross(rays, axis, delta, s, t0, t1)
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
+        if let Some(c) = unsafe { sse::cross(rays, axis, delta, s, t0, t1) } {
+            return c;
+        }
+        cross_portable(rays, axis & 3, delta, s, t0, t1)
     }
 }
 
@@ -109,7 +119,7 @@ impl LaneSet for Avx {
     #[inline(always)]
     fn at_or_before<T: Real>(self, a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
         // SAFETY: an `Avx` exists only where the CPU has AVX2.
-        unsafe { avx::at_or_before(a, b) }.unwrap_or_else(|| at_or_before(a, b))
+        unsafe { avx::at_or_before(a, b) }.unwrap_or_else(|| Baseline.at_or_before(a, b))
     }
 
     #[inline(always)]
@@ -124,37 +134,8 @@ impl LaneSet for Avx {
     ) -> Crossing<T> {
         // SAFETY: an `Avx` exists only where the CPU has AVX2.
         unsafe { avx::cross(rays, axis, delta, s, t0, t1) }
-            .unwrap_or_else(|| cross(rays, axis, delta, s, t0, t1))
+            .unwrap_or_else(|| Baseline.cross(rays, axis, delta, s, t0, t1))
     }
-}
-
-/// [`LaneSet::at_or_before`] in SSE2.
-#[inline(always)]
-fn at_or_before<T: Real>(a: &[T; PACKET], b: &[T; PACKET]) -> Lanes {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-    if let Some(m) = unsafe { sse::at_or_before(a, b) } {
-        return m;
-    }
-    (0..PACKET).fold(0, |m, l| m | (Lanes::from(a[l] <= b[l]) << l))
-}
-
-/// [`LaneSet::cross`] in SSE2.
-#[inline(always)]
-fn cross<T: Real>(
-    rays: &LaneRays<T>,
-    axis: usize,
-    delta: &[T; PACKET],
-    s: T,
-    t0: &[T; PACKET],
-    t1: &[T; PACKET],
-) -> Crossing<T> {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of x86-64's baseline, so this CPU has it.
-    if let Some(c) = unsafe { sse::cross(rays, axis, delta, s, t0, t1) } {
-        return c;
-    }
-    cross_portable(rays, axis & 3, delta, s, t0, t1)
 }
 
 /// One instruction set's lanes behind the generic `T`: `$f32` where `T` is
@@ -168,7 +149,7 @@ macro_rules! typed_lanes {
             use super::{Crossing, LaneRays, Lanes, PACKET, cast, cast_mut};
             use accel_core::Real;
 
-            /// [`super::at_or_before`] in this set.
+            /// [`super::LaneSet::at_or_before`] in this set.
             ///
             /// # Safety
             /// The CPU has this module's instruction set.
@@ -188,7 +169,7 @@ macro_rules! typed_lanes {
                 None
             }
 
-            /// [`super::cross`] in this set.
+            /// [`super::LaneSet::cross`] in this set.
             ///
             /// # Safety
             /// The CPU has this module's instruction set.
@@ -238,7 +219,7 @@ typed_lanes!(sse, "SSE2 lanes of `f32` or `f64`.", sse_f32, sse_f64);
 #[cfg(target_arch = "x86_64")]
 typed_lanes!(avx, "AVX lanes of `f32` or `f64`.", avx_f32, avx_f64);
 
-/// [`cross`] one lane at a time: the single walk's expressions.
+/// [`LaneSet::cross`] one lane at a time: the single walk's expressions.
 #[inline(always)]
 pub(crate) fn cross_portable<T: Real>(
     rays: &LaneRays<T>,
@@ -316,7 +297,7 @@ macro_rules! simd_lanes {
                 unsafe { $store(a.as_mut_ptr().add(W * c), v) }
             }
 
-            /// [`super::at_or_before`].
+            /// [`super::LaneSet::at_or_before`] for one float type.
             #[inline]
             #[target_feature(enable = $feature)]
             pub(super) fn at_or_before(a: &[$t; PACKET], b: &[$t; PACKET]) -> Lanes {
@@ -325,7 +306,7 @@ macro_rules! simd_lanes {
                 })
             }
 
-            /// [`super::cross`].
+            /// [`super::LaneSet::cross`] for one float type.
             #[inline]
             #[target_feature(enable = $feature)]
             pub(super) fn cross(

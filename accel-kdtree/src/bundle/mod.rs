@@ -36,6 +36,18 @@ fn first_lanes(n: usize) -> Lanes {
     (1 << n) - 1
 }
 
+/// The lanes' traversal rays, as references: lanes without one (not in
+/// the packet's set) repeat one that has.
+fn lane_refs<T>(trs: &[Option<TraversalRay<T>>; PACKET]) -> [&TraversalRay<T>; PACKET] {
+    let filler = trs.iter().flatten().next();
+    core::array::from_fn(|l| {
+        trs[l]
+            .as_ref()
+            .or(filler)
+            .expect("packet_rays returns at least one lane")
+    })
+}
+
 /// The packet a valid ray may join: the signs of its direction's components
 /// (bit `a` set for a positive component `a`), or `None` when a component
 /// is zero or subnormal, so the ray goes alone. Normal components have
@@ -167,7 +179,8 @@ trait Query<T: Real>: Copy {
     /// One ray's answer.
     type Answer: Copy;
 
-    /// The answers of a packet's rays (`index` into `rays`).
+    /// The answers of a packet's rays (`index` into `rays`), part by part
+    /// as the single query ([`KdTree::nearest`], [`KdTree::any`]).
     fn packet<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, L: LaneSet>(
         self,
         tree: &KdTree<'_, T, P, S>,
@@ -201,7 +214,27 @@ impl<T: Real> Query<T> for NearestHits {
         index: &[usize],
         stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET] {
-        tree.nearest_packet(set, rays, index, stack)
+        let mut best = [None; PACKET];
+        let mut trs = [None; PACKET];
+        for part in &tree.parts {
+            let lanes = tree.packet_rays(rays, index, &part.bounds, &mut trs);
+            if lanes == 0 {
+                continue;
+            }
+            let trs = lane_refs(&trs);
+            let mut v: [Nearest<'_, T, P>; PACKET] = core::array::from_fn(|l| Nearest {
+                prims: tree.primitives(),
+                packed: tree.packed.as_ref(),
+                tr: trs[l],
+                mailbox: Mailbox::new(),
+                best: best[l],
+            });
+            tree.walk_packet(set, part.root, &trs, lanes, &mut v, stack);
+            for (b, v) in best.iter_mut().zip(&v) {
+                *b = v.best;
+            }
+        }
+        best
     }
 
     #[inline(always)]
@@ -230,7 +263,34 @@ impl<T: Real> Query<T> for AnyHits {
         index: &[usize],
         stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET] {
-        tree.any_packet(set, rays, index, stack)
+        let mut found = [false; PACKET];
+        let mut open = first_lanes(index.len());
+        let mut trs = [None; PACKET];
+        for part in &tree.parts {
+            let lanes = tree.packet_rays(rays, index, &part.bounds, &mut trs);
+            if lanes == 0 {
+                continue;
+            }
+            let trs = lane_refs(&trs);
+            let mut v: [AnyHit<'_, T, P>; PACKET] = core::array::from_fn(|l| AnyHit {
+                prims: tree.primitives(),
+                packed: tree.packed.as_ref(),
+                tr: trs[l],
+                mailbox: Mailbox::new(),
+                found: false,
+            });
+            tree.walk_packet(set, part.root, &trs, lanes & open, &mut v, stack);
+            for (l, v) in v.iter().enumerate() {
+                if v.found {
+                    found[l] = true;
+                    open &= !(1 << l);
+                }
+            }
+            if open == 0 {
+                break;
+            }
+        }
+        found
     }
 
     #[inline(always)]
@@ -343,91 +403,6 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
             .enumerate()
             .fold(0, |m, (l, t)| m | (Lanes::from(t.is_some()) << l))
             & first_lanes(index.len())
-    }
-
-    /// The lanes' traversal rays, as references: lanes without one (not in
-    /// the packet's set) repeat one that has.
-    fn lane_refs(trs: &[Option<TraversalRay<T>>; PACKET]) -> [&TraversalRay<T>; PACKET] {
-        let filler = trs.iter().flatten().next();
-        core::array::from_fn(|l| {
-            trs[l]
-                .as_ref()
-                .or(filler)
-                .expect("packet_rays returns at least one lane")
-        })
-    }
-
-    /// The nearest hit of each ray of a packet, part by part as
-    /// [`KdTree::nearest`].
-    #[inline(always)]
-    fn nearest_packet<L: LaneSet>(
-        &self,
-        set: L,
-        rays: &[Ray<T>],
-        index: &[usize],
-        stack: &mut Stack<T>,
-    ) -> [Option<Hit<T>>; PACKET] {
-        let mut best = [None; PACKET];
-        let mut trs = [None; PACKET];
-        for part in &self.parts {
-            let lanes = self.packet_rays(rays, index, &part.bounds, &mut trs);
-            if lanes == 0 {
-                continue;
-            }
-            let trs = Self::lane_refs(&trs);
-            let mut v: [Nearest<'_, T, P>; PACKET] = core::array::from_fn(|l| Nearest {
-                prims: self.primitives(),
-                packed: self.packed.as_ref(),
-                tr: trs[l],
-                mailbox: Mailbox::new(),
-                best: best[l],
-            });
-            self.walk_packet(set, part.root, &trs, lanes, &mut v, stack);
-            for (b, v) in best.iter_mut().zip(&v) {
-                *b = v.best;
-            }
-        }
-        best
-    }
-
-    /// Whether each ray of a packet hits anything, part by part as
-    /// [`KdTree::any`].
-    #[inline(always)]
-    fn any_packet<L: LaneSet>(
-        &self,
-        set: L,
-        rays: &[Ray<T>],
-        index: &[usize],
-        stack: &mut Stack<T>,
-    ) -> [bool; PACKET] {
-        let mut found = [false; PACKET];
-        let mut open = first_lanes(index.len());
-        let mut trs = [None; PACKET];
-        for part in &self.parts {
-            let lanes = self.packet_rays(rays, index, &part.bounds, &mut trs);
-            if lanes == 0 {
-                continue;
-            }
-            let trs = Self::lane_refs(&trs);
-            let mut v: [AnyHit<'_, T, P>; PACKET] = core::array::from_fn(|l| AnyHit {
-                prims: self.primitives(),
-                packed: self.packed.as_ref(),
-                tr: trs[l],
-                mailbox: Mailbox::new(),
-                found: false,
-            });
-            self.walk_packet(set, part.root, &trs, lanes & open, &mut v, stack);
-            for (l, v) in v.iter().enumerate() {
-                if v.found {
-                    found[l] = true;
-                    open &= !(1 << l);
-                }
-            }
-            if open == 0 {
-                break;
-            }
-        }
-        found
     }
 
     /// Walks a packet in the lanes of `set`, narrowing each ray's beam per
