@@ -413,8 +413,9 @@ impl<T: Real> Packet<T> {
     /// Walks `root` with the members whose rays stay close enough together
     /// ([`coherent`]): all of them if they do, else each run of
     /// [`SUB_PACKET`] consecutive slots (in a tile in Z order, a 4 × 4
-    /// block of pixels) whose members do, if there are [`MIN_PACKET`] or
-    /// [`MIN_SUB_PACKET`] of them; returns the members walked, a bit each.
+    /// block of pixels) whose members do and number [`MIN_SUB_PACKET`] or
+    /// more; nothing if the packet has fewer than [`MIN_PACKET`] members.
+    /// Returns the members walked, a bit each.
     fn walk_coherent<G: SliceCells<T> + ?Sized>(&mut self, root: &G) -> u64 {
         let n = self.members.len();
         if n < MIN_PACKET {
