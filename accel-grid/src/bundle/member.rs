@@ -2,7 +2,7 @@
 //! rectangles that hold all their beams in a slab.
 
 use crate::cells::GridGeometry;
-use accel_core::{Hit, Mailbox, Real, TraversalRay};
+use accel_core::{Hit, Mailbox, PrimitiveSet, Real, TraversalRay, nearer};
 
 use super::COHERENT_CELLS;
 
@@ -105,6 +105,37 @@ impl<T: Real> Member<T> {
         };
         let ((u0, u1), (v0, v1)) = (span(u), span(v));
         Footprint::Within([u0, u1, v0, v1])
+    }
+}
+
+/// Tests primitive `p` of `prims` against the ray of `tr` (unless
+/// `mailbox` has seen it), as its single walk does: keeps the nearer hit in
+/// `best` and returns whether an any-hit query (`ANY`) is answered. (The
+/// parts of a [`Member`], so that its beam can be read while the rest
+/// changes.)
+#[inline]
+pub(super) fn candidate<const ANY: bool, T: Real, P: PrimitiveSet<T> + ?Sized>(
+    tr: &TraversalRay<T>,
+    mailbox: &mut Mailbox,
+    best: &mut Option<Hit<T>>,
+    p: u32,
+    prims: &P,
+) -> bool {
+    if mailbox.seen(p) {
+        return false;
+    }
+    let ray_max = tr.ray().t_max;
+    let t_max = if ANY {
+        ray_max
+    } else {
+        best.map_or(ray_max, |b| b.t)
+    };
+    match prims.intersect(p as usize, &tr.prepared, t_max) {
+        Some(h) => {
+            *best = nearer(*best, Hit::new(p, h));
+            ANY
+        }
+        None => false,
     }
 }
 

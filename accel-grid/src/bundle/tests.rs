@@ -1,5 +1,6 @@
 //! The two ways a slice marks which members meet which full cells agree;
-//! a packet too spread to walk whole walks its coherent runs.
+//! a packet too spread to walk whole walks its coherent runs; the two ways
+//! a cell's triangles are tested give the same answers.
 
 use super::part::PartCells;
 use super::*;
@@ -96,4 +97,56 @@ fn a_spread_packet_walks_its_coherent_runs() {
         hits += usize::from(single.is_some());
     }
     assert!(hits > 32, "{hits} rays hit the soup");
+}
+
+/// A coherent packet of 64 rays through a dense soup gets its single
+/// walks' answers, nearest and any hit, whether its cells are tested
+/// triangle by triangle with the quads' first stage (where the CPU has
+/// AVX2) or member by member (the quads taken away); members past the 32nd
+/// too.
+#[test]
+fn cells_tested_by_triangles_or_by_members_give_the_single_answers() {
+    let mesh: TriangleMesh<f32> = random_soup(20_000, 7).cast().unwrap();
+    let grid = Grid::new(&mesh).unwrap();
+    let part = &grid.first;
+    let origin = Vec3::new(0.45, 0.55, -2.0);
+    let rays: Vec<Ray<f32>> = (0..PACKET)
+        .map(|i| {
+            let fan = Vec3::new(4e-3 * (i % 8) as f64, 4e-3 * (i / 8) as f64, 0.0);
+            Ray::new(origin, Vec3::new(0.5, 0.5, 0.5) - origin + fan)
+                .unwrap()
+                .cast()
+        })
+        .collect();
+    let form = |by_triangles: bool| {
+        let mut packet = Packet::form(&rays, part.geometry.bounds(), |_, _| {}).unwrap();
+        assert_eq!(packet.members.len(), PACKET);
+        assert!(coherent(&packet.members, &part.geometry, packet.axes));
+        if simd_level() >= SimdLevel::Avx2 {
+            assert!(packet.quads.iter().all(Option::is_some), "one axis order");
+        }
+        if !by_triangles {
+            packet.quads.clear();
+        }
+        packet
+    };
+    let mut hits = 0;
+    for by_triangles in [true, false] {
+        let mut nearest = form(by_triangles);
+        nearest.walk(&PartCells::<f32, _, false> { part, prims: &mesh }, u64::MAX);
+        let mut any = form(by_triangles);
+        any.walk(&PartCells::<f32, _, true> { part, prims: &mesh }, u64::MAX);
+        for (i, m) in nearest.members.iter().enumerate() {
+            let single = grid.intersect(&rays[m.slot]).unwrap();
+            assert_eq!(
+                m.best, single,
+                "ray {} by triangles: {by_triangles}",
+                m.slot
+            );
+            let occluded = any.finished & (1 << i) != 0;
+            assert_eq!(occluded, single.is_some(), "ray {} occluded", m.slot);
+            hits += usize::from(single.is_some());
+        }
+    }
+    assert!(hits > 2 * 48, "{hits} hits over both ways");
 }

@@ -22,6 +22,10 @@
 //! AVX2's and is not kept; AVX-512 would pay with blocks of eight, which the
 //! short lists of these structures would mostly leave half empty.
 //!
+//! The same first stage also runs on its side, one triangle against four
+//! rays ([`RayQuad`]), for structures that walk rays in packets: the grid's
+//! packets test a cell's triangles so.
+//!
 //! Packed and indexed lists are a speed–memory dial ([`Layout`]): a block of
 //! four `f32` triangles takes 144 bytes, against 4 bytes per reference into
 //! the shared mesh.
@@ -162,31 +166,37 @@ impl<T: Real> TriangleBlock<T> {
     /// computes them.
     #[inline(always)]
     fn survivors(&self, ray: &BlockRay) -> u32 {
-        let [kx, ky, kz] = ray.axes;
-        let o = ray.origin;
-        let mut x = [[0.0f64; LANES]; 3];
-        let mut y = [[0.0f64; LANES]; 3];
-        for k in 0..3 {
-            let p = &self.v[k];
-            for l in 0..LANES {
-                let az = p[kz][l].to_f64() - o[kz];
-                x[k][l] = (p[kx][l].to_f64() - o[kx]) - ray.shear_x * az;
-                y[k][l] = (p[ky][l].to_f64() - o[ky]) - ray.shear_y * az;
-            }
-        }
-        let [ax, bx, cx] = x;
-        let [ay, by, cy] = y;
-        let mut keep = [false; LANES];
-        for l in 0..LANES {
-            let su = crate::triangle::sure_sign(cx[l] * by[l], cy[l] * bx[l]);
-            let sv = crate::triangle::sure_sign(ax[l] * cy[l], ay[l] * cx[l]);
-            let sw = crate::triangle::sure_sign(bx[l] * ay[l], by[l] * ax[l]);
-            keep[l] = !crate::triangle::opposite_signs(su, sv, sw);
-        }
-        keep.iter()
-            .enumerate()
-            .fold(0, |m, (l, &k)| m | (u32::from(k) << l))
+        (0..LANES).fold(0, |m, l| {
+            let vertex = |k: usize| {
+                let p = &self.v[k];
+                [p[0][l], p[1][l], p[2][l]].map(T::to_f64)
+            };
+            let sheared = |k| sheared(vertex(k), ray.origin, [ray.shear_x, ray.shear_y], ray.axes);
+            m | (u32::from(survives(sheared(0), sheared(1), sheared(2))) << l)
+        })
     }
+}
+
+/// A vertex `p` translated to a ray's origin `o` and sheared by its
+/// constants `s`: its `x` and `y` in the ray's frame, as
+/// [`crate::triangle::intersect_triangle`] computes them.
+#[inline(always)]
+fn sheared(p: [f64; 3], o: [f64; 3], s: [f64; 2], [kx, ky, kz]: [usize; 3]) -> (f64, f64) {
+    let az = p[kz] - o[kz];
+    ((p[kx] - o[kx]) - s[0] * az, (p[ky] - o[ky]) - s[1] * az)
+}
+
+/// Whether the watertight test's first stage keeps a triangle whose sheared
+/// vertices are `a`, `b`, `c`: no two of its plain edge products' sure
+/// signs are opposite.
+#[inline(always)]
+fn survives((ax, ay): (f64, f64), (bx, by): (f64, f64), (cx, cy): (f64, f64)) -> bool {
+    use crate::triangle::{opposite_signs, sure_sign};
+    !opposite_signs(
+        sure_sign(cx * by, cy * bx),
+        sure_sign(ax * cy, ay * cx),
+        sure_sign(bx * ay, by * ax),
+    )
 }
 
 /// The triangles of a structure's reference lists in blocks of [`LANES`].
@@ -367,7 +377,7 @@ unsafe fn candidates_simd<T: Real>(
     mut test: impl FnMut(u32) -> bool,
 ) -> bool {
     // SAFETY: the caller promises AVX2.
-    let lanes = unsafe { avx2::RayLanes::new(ray) };
+    let lanes = unsafe { avx2::RayLanes::broadcast(ray) };
     for (block, prims) in blocks.iter().zip(list.chunks(LANES)) {
         // SAFETY: as above.
         let survivors = unsafe { avx2::survivors(block, &lanes, ray.axes) };
@@ -391,144 +401,11 @@ fn candidates_avx2<T: Real>(
     unsafe { candidates_simd(blocks, list, ray, test) }
 }
 
-/// The block test in AVX2 intrinsics: [`TriangleBlock::survivors`], lane
-/// for lane the same operations in `f64` (no fused multiply–add), four
-/// lanes per instruction.
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::{BlockRay, LANES, TriangleBlock};
-    use crate::Real;
-    use std::arch::x86_64::{
-        __m256d, _CMP_GT_OQ, _CMP_LT_OQ, _mm_loadu_ps, _mm256_add_pd, _mm256_and_pd,
-        _mm256_andnot_pd, _mm256_cmp_pd, _mm256_cvtps_pd, _mm256_loadu_pd, _mm256_movemask_pd,
-        _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sub_pd,
-    };
+mod avx2;
+mod quad;
 
-    /// The ray's constants, one per lane.
-    pub(super) struct RayLanes {
-        origin: [__m256d; 3],
-        shear_x: __m256d,
-        shear_y: __m256d,
-    }
-
-    impl RayLanes {
-        /// # Safety
-        /// The CPU must have AVX2 (as for every function here).
-        #[inline(always)]
-        pub(super) unsafe fn new(ray: &BlockRay) -> Self {
-            // SAFETY: the caller promises AVX2.
-            unsafe {
-                Self {
-                    origin: [
-                        _mm256_set1_pd(ray.origin[0]),
-                        _mm256_set1_pd(ray.origin[1]),
-                        _mm256_set1_pd(ray.origin[2]),
-                    ],
-                    shear_x: _mm256_set1_pd(ray.shear_x),
-                    shear_y: _mm256_set1_pd(ray.shear_y),
-                }
-            }
-        }
-    }
-
-    /// One coordinate of four triangles' vertex, widened to `f64`.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 (as for every function here).
-    #[inline(always)]
-    unsafe fn load<T: Real>(lanes: &[T; LANES]) -> __m256d {
-        if size_of::<T>() == size_of::<f32>() {
-            // SAFETY: `Real` is sealed to f32 and f64, so a `T` of f32's
-            // size is f32; the array holds four of them.
-            unsafe { _mm256_cvtps_pd(_mm_loadu_ps(lanes.as_ptr().cast::<f32>())) }
-        } else {
-            // SAFETY: as above, `T` is f64 here; four of them.
-            unsafe { _mm256_loadu_pd(lanes.as_ptr().cast::<f64>()) }
-        }
-    }
-
-    /// One vertex of four triangles translated to the ray origin and
-    /// sheared: its `x` and `y` in the ray's frame. (A function, not a
-    /// closure: closures here would not inherit the caller's AVX2.)
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[inline(always)]
-    unsafe fn sheared<T: Real>(
-        p: &[[T; LANES]; 3],
-        ray: &RayLanes,
-        [kx, ky, kz]: [usize; 3],
-    ) -> (__m256d, __m256d) {
-        // SAFETY: the caller promises AVX2.
-        unsafe {
-            let az = _mm256_sub_pd(load(&p[kz]), ray.origin[kz]);
-            (
-                _mm256_sub_pd(
-                    _mm256_sub_pd(load(&p[kx]), ray.origin[kx]),
-                    _mm256_mul_pd(ray.shear_x, az),
-                ),
-                _mm256_sub_pd(
-                    _mm256_sub_pd(load(&p[ky]), ray.origin[ky]),
-                    _mm256_mul_pd(ray.shear_y, az),
-                ),
-            )
-        }
-    }
-
-    /// The lanes where `p − q` is surely below zero, and those where it is
-    /// surely above (`crate::triangle::sure_sign` on four lanes).
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[inline(always)]
-    unsafe fn sure_sign(p: __m256d, q: __m256d) -> (__m256d, __m256d) {
-        // SAFETY: the caller promises AVX2.
-        unsafe {
-            let sign = _mm256_set1_pd(-0.0);
-            let r = _mm256_sub_pd(p, q);
-            let bound = _mm256_add_pd(
-                _mm256_mul_pd(
-                    _mm256_set1_pd(2.0 * f64::EPSILON),
-                    _mm256_add_pd(_mm256_andnot_pd(sign, p), _mm256_andnot_pd(sign, q)),
-                ),
-                _mm256_set1_pd(f64::MIN_POSITIVE),
-            );
-            let sure = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_andnot_pd(sign, r), bound);
-            let zero = _mm256_setzero_pd();
-            (
-                _mm256_and_pd(sure, _mm256_cmp_pd::<_CMP_LT_OQ>(r, zero)),
-                _mm256_and_pd(sure, _mm256_cmp_pd::<_CMP_GT_OQ>(r, zero)),
-            )
-        }
-    }
-
-    /// The lanes the first stage of the watertight test does not reject.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2.
-    #[inline(always)]
-    pub(super) unsafe fn survivors<T: Real>(
-        block: &TriangleBlock<T>,
-        ray: &RayLanes,
-        [kx, ky, kz]: [usize; 3],
-    ) -> u32 {
-        // SAFETY: the caller promises AVX2.
-        unsafe {
-            let axes = [kx, ky, kz];
-            let (ax, ay) = sheared(&block.v[0], ray, axes);
-            let (bx, by) = sheared(&block.v[1], ray, axes);
-            let (cx, cy) = sheared(&block.v[2], ray, axes);
-            let (un, up) = sure_sign(_mm256_mul_pd(cx, by), _mm256_mul_pd(cy, bx));
-            let (vn, vp) = sure_sign(_mm256_mul_pd(ax, cy), _mm256_mul_pd(ay, cx));
-            let (wn, wp) = sure_sign(_mm256_mul_pd(bx, ay), _mm256_mul_pd(by, ax));
-            let reject = _mm256_and_pd(
-                _mm256_or_pd(_mm256_or_pd(un, vn), wn),
-                _mm256_or_pd(_mm256_or_pd(up, vp), wp),
-            );
-            !(_mm256_movemask_pd(reject) as u32) & 0xF
-        }
-    }
-}
+pub use quad::RayQuad;
 
 /// A triangle's vertices as a block lane holds them (for tests).
 #[cfg(test)]
