@@ -1,5 +1,6 @@
-//! A packet's rays: each one's walk state and beam footprint, and the
-//! rectangles that hold all their beams in a slab.
+//! A packet's rays: each one's walk state and its test of a primitive, and
+//! the rectangles that hold all their beams in a slab (each one's own
+//! rectangle: [`super::beams`]).
 
 use crate::cells::GridGeometry;
 use accel_core::{Hit, Mailbox, PrimitiveSet, Real, TraversalRay, nearer};
@@ -17,8 +18,6 @@ pub(super) struct Member<T: Real> {
     /// coordinate computed from it.
     pub(super) pad: T,
     pub(super) best: Option<Hit<T>>,
-    /// Slices entered after this parameter are not needed.
-    pub(super) limit: T,
     pub(super) mailbox: Mailbox,
     /// Its line across the main axis on each cross axis, `x_a = c +
     /// m·(x_k − pivot)`: `[c, m]` ([`Lines`]); set once the packet's axes
@@ -26,16 +25,6 @@ pub(super) struct Member<T: Real> {
     pub(super) line: [[T; 2]; 2],
     /// The largest magnitude of its origin's coordinates.
     o_mag: T,
-}
-
-/// Where a member's beam lies while it is in a slab of the main axis.
-pub(super) enum Footprint<T> {
-    /// The beam reaches the slab only later (its interval starts beyond it).
-    NotYet,
-    /// The beam enters the slab after its limit: the ray is finished there.
-    Past,
-    /// Lowest and highest coordinate on the two cross axes, widened.
-    Within([T; 4]),
 }
 
 impl<T: Real> Member<T> {
@@ -51,7 +40,6 @@ impl<T: Real> Member<T> {
         let pad = tr.delta + T::gamma(16) * (o + d * t);
         Self {
             slot,
-            limit: tr.t_end,
             tr,
             pad,
             best: None,
@@ -71,40 +59,6 @@ impl<T: Real> Member<T> {
             let slope = r.direction[a] * inv;
             [r.origin[a] + (pivot - r.origin[k]) * slope, slope]
         });
-    }
-
-    /// The beam's rectangle on axes `u`, `v` while its `k` extent meets the
-    /// slab `[x_lo, x_hi]`, over the ray's interval up to its limit.
-    #[inline]
-    pub(super) fn footprint(&self, [k, u, v]: [usize; 3], x_lo: T, x_hi: T) -> Footprint<T> {
-        let r = self.tr.ray();
-        let (o, d, inv) = (r.origin, r.direction, self.tr.prepared.inv_dir[k]);
-        let ta = ((x_lo - self.pad) - o[k]) * inv;
-        let tb = ((x_hi + self.pad) - o[k]) * inv;
-        let (enter, leave) = if ta <= tb { (ta, tb) } else { (tb, ta) };
-        if enter > self.limit {
-            return Footprint::Past;
-        }
-        if leave < self.tr.t_start {
-            return Footprint::NotYet;
-        }
-        let t0 = if enter > self.tr.t_start {
-            enter
-        } else {
-            self.tr.t_start
-        };
-        let t1 = if leave < self.limit {
-            leave
-        } else {
-            self.limit
-        };
-        let span = |a: usize| {
-            let (p, q) = (o[a] + d[a] * t0, o[a] + d[a] * t1);
-            let (lo, hi) = if p <= q { (p, q) } else { (q, p) };
-            (lo - self.pad, hi + self.pad)
-        };
-        let ((u0, u1), (v0, v1)) = (span(u), span(v));
-        Footprint::Within([u0, u1, v0, v1])
     }
 }
 

@@ -32,6 +32,7 @@
 //! single walk's answer. Rays that do not suit the packet (another main
 //! axis or sign, a tiny main component) take the single walk.
 
+mod beams;
 mod member;
 mod part;
 #[cfg(test)]
@@ -41,7 +42,8 @@ use crate::blocks::Blocks;
 use crate::cells::GridGeometry;
 use accel_core::packed::{PackedTriangles, RayQuad, SimdLevel, for_each_candidate, simd_level};
 use accel_core::{Hit, Mailbox, PreparedRay, PrimitiveSet, QueryError, Ray, Real, TraversalRay};
-use member::{Footprint, Lines, Member, bits, candidate, coherent};
+use beams::Beams;
+use member::{Lines, Member, bits, candidate, coherent};
 
 /// Rays walked together at most; larger bundles are cut into packets.
 pub const PACKET: usize = 64;
@@ -297,6 +299,8 @@ pub struct Packet<T: Real> {
     finished: u64,
     /// Scratch space, one per grid being walked (nested walks stack up).
     scratch: Vec<Scratch>,
+    /// The members' beams side by side, with their limits.
+    beams: Beams<T>,
 }
 
 /// What becomes of a ray a packet does not take.
@@ -375,6 +379,7 @@ impl<T: Real> Packet<T> {
             Vec::new()
         };
         (!members.is_empty()).then(|| Self {
+            beams: Beams::new(&members, axes),
             quads,
             members,
             axes,
@@ -480,9 +485,10 @@ impl<T: Real> Packet<T> {
         let xs = geom.boundaries(k);
         // The slices the members' beams reach, in the order they go.
         let (mut x_min, mut x_max) = (T::INFINITY, T::NEG_INFINITY);
-        for m in bits(live).map(|i| &self.members[i]) {
+        for i in bits(live) {
+            let m = &self.members[i];
             let r = m.tr.ray();
-            for t in [m.tr.t_start, m.limit] {
+            for t in [m.tr.t_start, self.beams.limit[i]] {
                 let x = r.origin[k] + r.direction[k] * t;
                 x_min = x_min.min(x - m.pad);
                 x_max = x_max.max(x + m.pad);
@@ -561,15 +567,17 @@ impl<T: Real> Packet<T> {
         for &(_, place, _) in &scratch.cells {
             scratch.meeting[place] = 0;
         }
-        let (cells, meeting) = (&scratch.cells, &mut scratch.meeting);
-        self.footprints(live, x_lo, x_hi, |i, f| {
-            for &(_, place, [cu, cv]) in cells {
+        let open = live & !self.finished;
+        let r = self.beams.rectangles(open, x_lo, x_hi);
+        let within = open & r.within;
+        if within != 0 {
+            for &(_, place, [cu, cv]) in &scratch.cells {
                 let (cu, cv) = (cu as usize, cv as usize);
-                if f[0] <= bu[cu + 1] && f[1] >= bu[cu] && f[2] <= bv[cv + 1] && f[3] >= bv[cv] {
-                    meeting[place] |= 1 << i;
-                }
+                let cell = [bu[cu], bu[cu + 1], bv[cv], bv[cv + 1]];
+                scratch.meeting[place] = r.meeting(cell) & within;
             }
-        })
+        }
+        live & !(open & r.past)
     }
 
     /// Marks, per cell of `window` (in `meeting`), the members of `live`
@@ -612,8 +620,8 @@ impl<T: Real> Packet<T> {
     }
 
     /// Hands `within` each unfinished member of `live` whose beam is in the
-    /// slab `[x_lo, x_hi]`, with its rectangle there ([`Member::footprint`]);
-    /// returns `live` without the members past the slab.
+    /// slab `[x_lo, x_hi]`, with its rectangle there ([`Beams::rectangles`]);
+    /// returns `live` without the unfinished members past the slab.
     #[inline]
     fn footprints(
         &self,
@@ -622,15 +630,12 @@ impl<T: Real> Packet<T> {
         x_hi: T,
         mut within: impl FnMut(usize, [T; 4]),
     ) -> u64 {
-        let mut still = live;
-        for i in bits(live & !self.finished) {
-            match self.members[i].footprint(self.axes, x_lo, x_hi) {
-                Footprint::Past => still &= !(1 << i),
-                Footprint::NotYet => {}
-                Footprint::Within(f) => within(i, f),
-            }
+        let open = live & !self.finished;
+        let r = self.beams.rectangles(open, x_lo, x_hi);
+        for i in bits(open & r.within) {
+            within(i, [r.f[0][i], r.f[1][i], r.f[2][i], r.f[3][i]]);
         }
-        still
+        live & !(open & r.past)
     }
 
     /// Hands each unfinished member of `meeting` alone to `walk`, with its
@@ -659,8 +664,9 @@ impl<T: Real> Packet<T> {
             self.finished |= 1 << i;
         } else if let Some(b) = m.best {
             let reach = b.t + m.tr.t_tol;
-            if reach < m.limit {
-                m.limit = reach;
+            let limit = &mut self.beams.limit[i];
+            if reach < *limit {
+                *limit = reach;
             }
         }
     }
