@@ -73,10 +73,12 @@ impl Layout {
     }
 }
 
-/// The SIMD instruction set the block test runs with.
+/// The SIMD instruction set the block test and the ray quads
+/// ([`RayQuad`]) run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SimdLevel {
-    /// No block test: each list's triangles are tested one by one.
+    /// No block test (each list's triangles are tested one by one) and no
+    /// quads (each ray of a packet tests a cell's triangles alone).
     Portable,
     /// AVX2.
     Avx2,

@@ -9,6 +9,13 @@ use accel_core::Real;
 /// Members computed together: the lanes in use are rounded up to this.
 const CHUNK: usize = 8;
 
+/// A chunk's members in a packet's mask, from bit 0.
+const CHUNK_MASK: u64 = (1 << CHUNK) - 1;
+
+// A packet's chunks fit the `u8` of `Rectangles::chunks`, a chunk's
+// members a `u8` mask.
+const _: () = assert!(PACKET / CHUNK <= 8 && CHUNK == 8);
+
 /// What each member's rectangle in a slab needs, per member (lane `i` for
 /// member `i`), on the packet's main axis `k` and cross axes `u`, `v`.
 pub(super) struct Beams<T> {
@@ -85,7 +92,7 @@ impl<T: Real> Beams<T> {
             within: 0,
         };
         for c in 0..self.lanes / CHUNK {
-            if (live >> (c * CHUNK)) & 0xFF == 0 {
+            if (live >> (c * CHUNK)) & CHUNK_MASK == 0 {
                 continue;
             }
             out.chunks |= 1 << c;
