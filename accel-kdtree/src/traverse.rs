@@ -333,13 +333,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         let Some(tr) = self.traversal_ray(ray, &part.bounds) else {
             return best;
         };
-        let mut v = Nearest {
-            prims: self.primitives(),
-            packed: self.packed.as_ref(),
-            tr: &tr,
-            mailbox: Mailbox::new(),
-            best,
-        };
+        let mut v = self.nearest_visitor(&tr, best);
         self.walk(part.root, &tr, &mut v, counter);
         v.best
     }
@@ -361,19 +355,43 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
             .any(|part| self.any_in(part, ray, counter)))
     }
 
+    /// The nearest-hit visitor of `tr` on this tree's primitives, from
+    /// `best` and an empty mailbox (single walks and packets alike).
+    #[inline(always)]
+    pub(crate) fn nearest_visitor<'q>(
+        &'q self,
+        tr: &'q TraversalRay<T>,
+        best: Option<Hit<T>>,
+    ) -> Nearest<'q, T, P> {
+        Nearest {
+            prims: self.primitives(),
+            packed: self.packed.as_ref(),
+            tr,
+            mailbox: Mailbox::new(),
+            best,
+        }
+    }
+
+    /// The any-hit visitor of `tr` on this tree's primitives, with an
+    /// empty mailbox, as [`KdTree::nearest_visitor`].
+    #[inline(always)]
+    pub(crate) fn any_visitor<'q>(&'q self, tr: &'q TraversalRay<T>) -> AnyHit<'q, T, P> {
+        AnyHit {
+            prims: self.primitives(),
+            packed: self.packed.as_ref(),
+            tr,
+            mailbox: Mailbox::new(),
+            found: false,
+        }
+    }
+
     /// Whether anything in `part` is hit.
     #[inline]
     fn any_in<C: CostCounter>(&self, part: &KdPart<T>, ray: &Ray<T>, counter: &mut C) -> bool {
         let Some(tr) = self.traversal_ray(ray, &part.bounds) else {
             return false;
         };
-        let mut v = AnyHit {
-            prims: self.primitives(),
-            packed: self.packed.as_ref(),
-            tr: &tr,
-            mailbox: Mailbox::new(),
-            found: false,
-        };
+        let mut v = self.any_visitor(&tr);
         self.walk(part.root, &tr, &mut v, counter);
         v.found
     }

@@ -25,7 +25,7 @@ use crate::build::decode_split;
 use crate::reach::node_beam;
 use crate::traverse::{AnyHit, BAND_ROUNDINGS, Nearest, STACK, Visitor};
 use crate::tree::KdTree;
-use accel_core::{Hit, Mailbox, PrimitiveSet, QueryError, Ray, Real, TraversalRay};
+use accel_core::{Hit, PrimitiveSet, QueryError, Ray, Real, TraversalRay};
 use core::borrow::Borrow;
 use lanes::{Baseline, LaneRays, LaneSet, Lanes, PACKET};
 
@@ -222,13 +222,8 @@ impl<T: Real> Query<T> for NearestHits {
                 continue;
             }
             let trs = lane_refs(&trs);
-            let mut v: [Nearest<'_, T, P>; PACKET] = core::array::from_fn(|l| Nearest {
-                prims: tree.primitives(),
-                packed: tree.packed.as_ref(),
-                tr: trs[l],
-                mailbox: Mailbox::new(),
-                best: best[l],
-            });
+            let mut v: [Nearest<'_, T, P>; PACKET] =
+                core::array::from_fn(|l| tree.nearest_visitor(trs[l], best[l]));
             tree.walk_packet(set, part.root, &trs, lanes, &mut v, stack);
             for (b, v) in best.iter_mut().zip(&v) {
                 *b = v.best;
@@ -272,13 +267,8 @@ impl<T: Real> Query<T> for AnyHits {
                 continue;
             }
             let trs = lane_refs(&trs);
-            let mut v: [AnyHit<'_, T, P>; PACKET] = core::array::from_fn(|l| AnyHit {
-                prims: tree.primitives(),
-                packed: tree.packed.as_ref(),
-                tr: trs[l],
-                mailbox: Mailbox::new(),
-                found: false,
-            });
+            let mut v: [AnyHit<'_, T, P>; PACKET] =
+                core::array::from_fn(|l| tree.any_visitor(trs[l]));
             tree.walk_packet(set, part.root, &trs, lanes & open, &mut v, stack);
             for (l, v) in v.iter().enumerate() {
                 if v.found {
