@@ -249,11 +249,12 @@ impl<T: Real> PreparedRay<T> {
         let kz = d.abs().max_dimension();
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
+        // Arrays, whose index is an address, where `Vec3`'s is a match.
+        let w = [d.x, d.y, d.z].map(T::to_f64);
         // Swapping keeps the winding (and so the sign convention) of the edge functions.
-        if d[kz] < T::ZERO {
+        if w[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        let w = d.map(T::to_f64);
         let shear = Vec3::new(w[kx] / w[kz], w[ky] / w[kz], 1.0 / w[kz]);
         Self {
             ray,
