@@ -54,10 +54,12 @@ impl<T: Real> Member<T> {
     /// origin, so at most the origins' largest magnitude).
     pub(super) fn set_axes(&mut self, [k, u, v]: [usize; 3], pivot: T) {
         let r = self.tr.ray();
-        let inv = self.tr.prepared.inv_dir[k];
+        // Arrays, whose index is an address, where `Vec3`'s is a match.
+        let (o, d) = (r.origin.to_array(), r.direction.to_array());
+        let inv = self.tr.prepared.inv_dir.to_array()[k];
         self.line = [u, v].map(|a| {
-            let slope = r.direction[a] * inv;
-            [r.origin[a] + (pivot - r.origin[k]) * slope, slope]
+            let slope = d[a] * inv;
+            [o[a] + (pivot - o[k]) * slope, slope]
         });
     }
 }
@@ -200,9 +202,10 @@ pub(super) fn coherent<T: Real>(
         let mut span = [[T::INFINITY, T::NEG_INFINITY]; 2];
         for m in members {
             let r = m.tr.ray();
-            let t = (x - r.origin[k]) * m.tr.prepared.inv_dir[k];
+            let (o, d) = (r.origin.to_array(), r.direction.to_array());
+            let t = (x - o[k]) * m.tr.prepared.inv_dir.to_array()[k];
             for (j, &a) in [u, v].iter().enumerate() {
-                let p = r.origin[a] + r.direction[a] * t;
+                let p = o[a] + d[a] * t;
                 span[j] = [span[j][0].min(p), span[j][1].max(p)];
             }
         }
