@@ -347,13 +347,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         out: &mut [Result<Q::Answer, QueryError>],
     ) {
         assert_eq!(rays.len(), out.len(), "one answer per ray of the bundle");
-        let mut stack = [(0, 0, [T::ZERO; PACKET], [T::ZERO; PACKET]); STACK];
+        // Filled on the first packet only: a bundle whose rays all go alone
+        // (diffuse bounces) does not clear it.
+        let mut stack = None;
         by_octant(rays, |group| match group {
             Group::Packet(index) => {
-                for (&i, answer) in index
-                    .iter()
-                    .zip(self.packet(query, rays, index, &mut stack))
-                {
+                // Lazily: `get_or_insert` would fill a new stack per packet.
+                #[allow(clippy::unnecessary_lazy_evaluations)]
+                let stack = stack
+                    .get_or_insert_with(|| [(0, 0, [T::ZERO; PACKET], [T::ZERO; PACKET]); STACK]);
+                for (&i, answer) in index.iter().zip(self.packet(query, rays, index, stack)) {
                     out[i] = Ok(answer);
                 }
             }
