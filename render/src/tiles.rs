@@ -3,6 +3,7 @@
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Side of a tile in pixels: big enough to amortise scheduling, small enough
 /// to balance the load across cores.
@@ -92,8 +93,9 @@ impl Tile {
 /// returns the image row by row; `f` returns the tile's pixels row by row.
 ///
 /// # Errors
-/// The first error of `f` met (in tile order); the other tiles may or may not
-/// have run.
+/// The error of the first tile (in tile order) whose `f` fails, whatever
+/// order the threads meet failures in; a tile after a failed one may or may
+/// not have run, every tile before it has.
 ///
 /// # Panics
 /// If `f` returns other than [`Tile::len`] pixels.
@@ -115,14 +117,36 @@ where
         y1: height,
     };
     let tiles: Vec<Tile> = whole.parts(TILE).collect();
-    let done: Vec<Vec<P>> = tiles
+    // The index of the first failed tile met so far: tiles after it are
+    // skipped, tiles before it still run, so the first failure in tile
+    // order is always among those that ran (rayon's own collection into a
+    // `Result` returns whichever error a thread met first).
+    let first_failure = AtomicUsize::new(usize::MAX);
+    let done: Vec<Option<Result<Vec<P>, E>>> = tiles
         .par_iter()
-        .map(|&tile| {
-            let out = f(tile)?;
-            assert_eq!(out.len(), tile.len(), "one result per pixel of {tile:?}");
-            progress.inc(out.len() as u64);
-            Ok(out)
+        .enumerate()
+        .map(|(i, &tile)| {
+            if i > first_failure.load(Ordering::Relaxed) {
+                return None;
+            }
+            let out = f(tile);
+            match &out {
+                Ok(pixels) => {
+                    assert_eq!(pixels.len(), tile.len(), "one result per pixel of {tile:?}");
+                    progress.inc(pixels.len() as u64);
+                }
+                Err(_) => {
+                    first_failure.fetch_min(i, Ordering::Relaxed);
+                }
+            }
+            Some(out)
         })
+        .collect();
+    // Every tile before the first failure ran, so the first `Err` in order,
+    // if any, is that failure, and no tile before it was skipped.
+    let done: Vec<Vec<P>> = done
+        .into_iter()
+        .map(|tile| tile.expect("no tile before the first failure is skipped"))
         .collect::<Result<_, E>>()?;
     let mut image = vec![P::default(); width as usize * height as usize];
     for (tile, pixels) in tiles.iter().zip(&done) {
@@ -139,8 +163,8 @@ where
 /// in parallel ([`for_each_tile`]), and returns the results row by row.
 ///
 /// # Errors
-/// The first error of `f` met (in tile order, row by row within a tile);
-/// the other tiles may or may not have run.
+/// The first error of `f` in tile order, row by row within a tile (as
+/// [`for_each_tile`]'s).
 pub fn for_each_pixel<P, E, F>(
     width: u32,
     height: u32,
@@ -186,6 +210,34 @@ mod tests {
             }
         });
         assert_eq!(r, Err("bad pixel"));
+    }
+
+    /// Several tiles fail, the first in tile order last in time: the error
+    /// returned is still the first tile's, on every run.
+    #[test]
+    fn the_first_failed_tile_in_order_names_the_error() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .expect("a thread pool");
+        let (w, h) = (8 * TILE, 4 * TILE);
+        for _ in 0..5 {
+            let bar = ProgressBar::hidden();
+            let r = pool.install(|| {
+                for_each_tile(w, h, &bar, |tile| {
+                    let index = (tile.y0 / TILE) * (w / TILE) + tile.x0 / TILE;
+                    match index {
+                        0..3 => Ok(vec![0u8; tile.len()]),
+                        3 => {
+                            std::thread::sleep(std::time::Duration::from_millis(30));
+                            Err(index)
+                        }
+                        _ => Err(index),
+                    }
+                })
+            });
+            assert_eq!(r, Err(3));
+        }
     }
 
     #[test]
