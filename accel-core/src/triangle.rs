@@ -242,6 +242,39 @@ pub fn clip_triangle_bounds_split<T: Real>(
     ]
 }
 
+/// The bounds of the parts of triangle `p0 p1 p2` below and above the plane
+/// `x[axis] = s` (`axis` in `0..3`), each holding its part despite
+/// rounding: the vertices on that side and the edges' crossings with the
+/// plane, no box faces. They are [`clip_triangle_bounds`] of each half of
+/// the triangle's own bounds, computed the cheaper way. A kD-tree build
+/// tightens the box of a primitive its split straddles with them where
+/// clipping to the node ([`clip_triangle_bounds_split`]) costs too much. A
+/// half the triangle does not reach is empty.
+#[must_use]
+pub fn triangle_halves_bounds<T: Real>(
+    p0: Vec3<T>,
+    p1: Vec3<T>,
+    p2: Vec3<T>,
+    axis: usize,
+    s: T,
+) -> [Aabb<T>; 2] {
+    let tb = Aabb::from_point(p0).union_point(p1).union_point(p2);
+    let (below, above) = tb.split_at(axis, s);
+    if !(tb.min[axis] < s && s < tb.max[axis]) {
+        // The plane does not cut the triangle's extent: one half holds it
+        // all, or meets it in a face.
+        return [below, above].map(|h| clip_triangle_bounds(p0, p1, p2, &h));
+    }
+    // The triangle's own bounds as the box: its faces cross nothing.
+    let clip = Clip::new([p0, p1, p2], &tb, &tb);
+    let acc = match axis {
+        0 => clip.halves::<0, 1, 2>(s.to_wide()),
+        1 => clip.halves::<1, 2, 0>(s.to_wide()),
+        _ => clip.halves::<2, 0, 1>(s.to_wide()),
+    };
+    [rounded(&acc[0], &below), rounded(&acc[1], &above)]
+}
+
 /// The inputs of one [`clip_triangle_bounds`] in the wide type, per axis.
 struct Clip<W> {
     /// The triangle's vertices.
@@ -357,6 +390,29 @@ impl<W: Real> Clip<W> {
                 if let Some(x) = self.box_edge_corners::<V, K, U, true>(ck, cu) {
                     add(x, halves);
                 }
+            }
+        }
+        acc
+    }
+
+    /// [`triangle_halves_bounds`]'s candidates below and above `x[K] = s`
+    /// (`U`, `V` the other two axes): the vertices on each side, and the
+    /// edges' crossings with the plane on both.
+    #[inline(always)]
+    fn halves<const K: usize, const U: usize, const V: usize>(&self, s: W) -> [WideBox<W>; 2] {
+        let mut acc = [WideBox::empty(), WideBox::empty()];
+        for p in &self.v {
+            if p[K] <= s {
+                acc[0].add(*p, *p);
+            }
+            if p[K] >= s {
+                acc[1].add(*p, *p);
+            }
+        }
+        for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+            if let Some((lo, hi)) = self.edge_crossing::<K, U, V, 3>(i, j, s) {
+                acc[0].add(lo, hi);
+                acc[1].add(lo, hi);
             }
         }
         acc
@@ -1067,6 +1123,48 @@ pub(crate) mod tests {
             shared += usize::from(own_work(&below) && own_work(&above));
         }
         shared
+    }
+
+    /// The halves of a triangle's own bounds, cheaply, against the single
+    /// clipper on each half, bit for bit, for cuts through its extent, at
+    /// its vertices and outside it.
+    fn check_halves<T: Real>(rng: &mut Rng, cases: usize) {
+        for _ in 0..cases {
+            let size = rng.range(0.01, 100.0);
+            let p = [0; 3].map(|_| {
+                v::<T>(
+                    rng.range(-size, size),
+                    rng.range(-size, size) + 3.0,
+                    rng.range(-size, size) - 1.0,
+                )
+            });
+            let tb = Aabb::from_points(p);
+            let axis = (rng.next_f64() * 3.0) as usize % 3;
+            let pick = rng.next_f64();
+            let s = if pick < 0.2 {
+                p[(rng.next_f64() * 3.0) as usize % 3][axis]
+            } else if pick < 0.3 {
+                T::from_f64(tb.max[axis].to_f64() + rng.range(0.0, size))
+            } else {
+                T::from_f64(rng.range(tb.min[axis].to_f64(), tb.max[axis].to_f64()))
+            };
+            let (below, above) = tb.split_at(axis, s);
+            let want = [below, above].map(|h| clip_triangle_bounds(p[0], p[1], p[2], &h));
+            let got = triangle_halves_bounds(p[0], p[1], p[2], axis, s);
+            for (w, g) in want.iter().zip(&got) {
+                assert!(
+                    (w.is_empty() && g.is_empty()) || (w.min == g.min && w.max == g.max),
+                    "{p:?} cut at x[{axis}] = {s:?}: {g:?}, clips of the own bounds' halves {want:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn halves_bounds_are_the_clips_of_the_own_bounds_halves() {
+        let mut rng = Rng(23);
+        check_halves::<f32>(&mut rng, 20_000);
+        check_halves::<f64>(&mut rng, 20_000);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! `cargo run --release -p accel-kdtree --example build_profile -- N|SCENE|FILE.glb [BINNED_ABOVE] [BINS]`;
 //! `KD_PRESET=fast-build|best-traversal|pbrt` starts from a preset, `KD_MAX_DEPTH=d`
 //! sets the depth limit, `KD_LEAF_SIZE=n`, `KD_TRAVERSAL_COST=c`,
-//! `KD_DEPTH_BASE=b` and `KD_CLIP_ABOVE=n` override the preset's,
+//! `KD_DEPTH_BASE=b`, `KD_CLIP_ABOVE=n` and `KD_TIGHTEN_ABOVE=n` override the preset's,
 //! `REPEAT=n` builds n more times and reports the fastest, `THREADS=n` builds on `n` threads.
 
 use accel_core::Accelerator;
@@ -70,6 +70,12 @@ fn main() {
         .and_then(|s| s.parse().ok())
     {
         params.clip_above = n;
+    }
+    if let Some(n) = std::env::var("KD_TIGHTEN_ABOVE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        params.tighten_above = n;
     }
     if let Some(above) = std::env::args().nth(2).and_then(|s| s.parse().ok()) {
         params.binned_above = above;

@@ -67,7 +67,8 @@ fn env_params(n: usize) -> KdTreeParams {
 }
 
 /// [`KdTreeParams::fast_build`] with `KD_LEAF_SIZE`, `KD_TRAVERSAL_COST`,
-/// `KD_DEPTH_BASE`, `KD_CLIP_ABOVE`, `KD_BINS` and `KD_BINNED_ABOVE` in
+/// `KD_DEPTH_BASE`, `KD_CLIP_ABOVE`, `KD_TIGHTEN_ABOVE`, `KD_BINS` and
+/// `KD_BINNED_ABOVE` in
 /// place of its values where set (the names `build_profile` reads).
 fn fast_params() -> KdTreeParams {
     fn get<V: std::str::FromStr>(k: &str) -> Option<V> {
@@ -79,6 +80,7 @@ fn fast_params() -> KdTreeParams {
         traversal_cost: get("KD_TRAVERSAL_COST").unwrap_or(p.traversal_cost),
         depth_base: get("KD_DEPTH_BASE").unwrap_or(p.depth_base),
         clip_above: get("KD_CLIP_ABOVE").unwrap_or(p.clip_above),
+        tighten_above: get("KD_TIGHTEN_ABOVE").unwrap_or(p.tighten_above),
         bins: get("KD_BINS").unwrap_or(p.bins),
         binned_above: get("KD_BINNED_ABOVE").unwrap_or(p.binned_above),
         ..p

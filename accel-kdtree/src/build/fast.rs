@@ -25,6 +25,7 @@ use super::binned::{BoxSide, box_side, clip_to_halves};
 use super::depth::Depth;
 use super::sah::{Sah, Split};
 use super::{Ctx, Out, Piece};
+use accel_core::triangle::triangle_halves_bounds;
 use accel_core::{Aabb, PrimitiveSet, Real, Vec3, parts};
 use std::sync::atomic::Ordering;
 
@@ -675,6 +676,7 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
     // Each straddler's upper part replaces it (packed down over the ones
     // with none), its lower part is appended after the below-only items.
     let clip = ctx.params.clip_above < end - start;
+    let tighten = ctx.params.tighten_above < end - start;
     let mut kept = above;
     for j in above..below {
         let it = buf[j];
@@ -685,11 +687,21 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
                 hi.map(|b| Item::new(it.prim, &b)),
             )
         } else {
-            // The box cut at the plane: as conservative, and cheaper.
-            let (mut lo, mut hi) = (it, it);
+            // The box cut at the plane, within the triangle's own halves
+            // (its vertices on each side and its edges' crossings with the
+            // plane): each holds the triangle's part of that half of the
+            // node, so their common part does too.
+            let (mut lo, mut hi) = (it.bounds(), it.bounds());
             lo.max[k] = p;
             hi.min[k] = p;
-            (Some(lo), Some(hi))
+            if tighten && let Some([a, b, c]) = ctx.prims.watertight_triangle(it.index() as usize) {
+                let [below_own, above_own] = triangle_halves_bounds(a, b, c, k, p);
+                (lo, hi) = (lo.intersection(&below_own), hi.intersection(&above_own));
+            }
+            (
+                (!lo.is_empty()).then(|| Item::new(it.prim, &lo)),
+                (!hi.is_empty()).then(|| Item::new(it.prim, &hi)),
+            )
         };
         if let Some(hi) = hi {
             tight_above.add(&hi);
