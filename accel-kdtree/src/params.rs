@@ -114,9 +114,10 @@ pub struct KdTreeParams {
     /// straddling a split is clipped to each child exactly in nodes over
     /// this many primitives; in smaller ones its box is cut at the plane,
     /// as conservative and much cheaper, at the price of more references
-    /// (the fast-build preset's 256 against 0: 1.3× the references on the
-    /// bunny, a third of the clipping time). The other builds always clip.
-    /// Default 0.
+    /// (256 against 0: 1.3× the references on the bunny, a third of the
+    /// clipping time), which [`KdTreeParams::tighten_above`] wins back
+    /// for less. The other builds always clip. Default 0; the fast-build
+    /// preset's `usize::MAX` (never).
     pub clip_above: usize,
     /// The fast build's cheaper tightening: in nodes over this many
     /// primitives where straddlers are not clipped (`clip_above`), each
