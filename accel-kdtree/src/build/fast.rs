@@ -17,9 +17,13 @@
 //! sweep build) in nodes over [`crate::KdTreeParams::clip_above`]
 //! primitives; in smaller ones their boxes are cut at the plane, which is
 //! as conservative (the primitive's part of a half lies in its box's part)
-//! and much cheaper. The number of bins falls with the node's size, so
-//! that the small nodes near the leaves are not priced at more planes than
-//! they have primitive bounds.
+//! and much cheaper, and in nodes over
+//! [`crate::KdTreeParams::tighten_above`] also kept within the triangle's
+//! own part of each half (its vertices there and its edges' crossings with
+//! the plane), which costs a few crossings and wins back most of what
+//! clipping to the node gains. The number of bins falls with the node's
+//! size, so that the small nodes near the leaves are not priced at more
+//! planes than they have primitive bounds.
 
 use super::binned::{BoxSide, box_side, clip_to_halves};
 use super::depth::Depth;
