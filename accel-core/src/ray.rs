@@ -250,7 +250,7 @@ impl<T: Real> PreparedRay<T> {
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         // Arrays, whose index is an address, where `Vec3`'s is a match.
-        let w = [d.x, d.y, d.z].map(T::to_f64);
+        let w = d.to_array().map(T::to_f64);
         // Swapping keeps the winding (and so the sign convention) of the edge functions.
         if w[kz] < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
