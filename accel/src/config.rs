@@ -9,7 +9,7 @@ use accel_core::packed::Layout;
 use accel_core::{BruteForce, BuildError, PrimitiveSet, Real};
 use accel_grid::{Grid, GridParams};
 use accel_kdtree::{KdTree, KdTreeParams};
-use accel_octree::{Octree, OctreeParams};
+use accel_octree::{Octree, OctreeParams, ResolutionRule};
 use std::fmt;
 use std::str::FromStr;
 
@@ -208,7 +208,10 @@ impl AccelConfig {
     }
 
     /// A short label: the kind and what differs from its defaults
-    /// (`grid m=3`, `octree classic`, `kdtree fast-build`, `kdtree ci=20`).
+    /// (`grid m=3`, `octree classic`, `kdtree fast-build`, `kdtree ci=20
+    /// ct=1 eb=0.3`). Configurations that build different structures get
+    /// different labels; the budgets (`max_bytes` and the like) and the
+    /// parallel threshold, which do not change a structure, are left out.
     #[must_use]
     pub fn label(&self) -> String {
         match self {
@@ -228,9 +231,10 @@ impl AccelConfig {
                     Some("default") => "octree".to_owned(),
                     Some(name) => format!("octree {name}"),
                     None => format!(
-                        "octree t={} d={}{}",
+                        "octree t={} d={}{}{}",
                         p.split_threshold,
                         p.max_depth,
+                        octree_rules_label(p),
                         flat_label(p.flat_part)
                     ),
                 };
@@ -241,12 +245,13 @@ impl AccelConfig {
                     Some("default") => "kdtree".to_owned(),
                     Some(name) => format!("kdtree {name}"),
                     None => format!(
-                        "kdtree ci={} ct={} eb={}{}{}{}",
+                        "kdtree ci={} ct={} eb={}{}{}{}{}",
                         p.intersect_cost,
                         p.traversal_cost,
                         p.empty_bonus,
                         binning_label(p),
                         depth_label(p),
+                        leaves_label(p),
                         flat_label(p.flat_part)
                     ),
                 };
@@ -284,13 +289,63 @@ fn flat_label(flat_part: bool) -> &'static str {
     if flat_part { "" } else { " no-flat" }
 }
 
-/// A kD-tree's depth limit constant when not the default: ` db=D`.
+/// A kD-tree's depth limit when not the default: ` db=D` (its constant),
+/// ` depth=N` (a fixed limit).
 fn depth_label(p: &KdTreeParams) -> String {
-    if p.depth_base == KdTreeParams::default().depth_base {
-        String::new()
-    } else {
-        format!(" db={}", p.depth_base)
+    let mut label = String::new();
+    if p.depth_base != KdTreeParams::default().depth_base {
+        label += &format!(" db={}", p.depth_base);
     }
+    if let Some(depth) = p.max_depth {
+        label += &format!(" depth={depth}");
+    }
+    label
+}
+
+/// What else shapes a kD-tree's leaves, when not the default: ` ls=N` (the
+/// leaf size) and, for the fast build (`binned_above` 0, the only one that
+/// reads them), ` clip>N` or ` no-clip` and ` tighten>N` or ` no-tighten`.
+/// The budgets and the parallel threshold do not change the tree and are
+/// left out.
+fn leaves_label(p: &KdTreeParams) -> String {
+    let d = KdTreeParams::default();
+    let mut label = String::new();
+    if p.leaf_size != d.leaf_size {
+        label += &format!(" ls={}", p.leaf_size);
+    }
+    if p.binned_above == 0 {
+        let above = |name: &str, n: usize, default: usize| match n {
+            _ if n == default => String::new(),
+            usize::MAX => format!(" no-{name}"),
+            n => format!(" {name}>{n}"),
+        };
+        label += &above("clip", p.clip_above, d.clip_above);
+        label += &above("tighten", p.tighten_above, d.tighten_above);
+    }
+    label
+}
+
+/// An octree's resolution rules and fitting when not the default:
+/// ` root=R`, ` children=R` (`m2`: density 2; `m2/1`: nested, density 2,
+/// one level planned below; `2x2x2`: fixed) and ` unfitted`.
+fn octree_rules_label(p: &OctreeParams) -> String {
+    let d = OctreeParams::default();
+    let rule = |r: ResolutionRule| match r {
+        ResolutionRule::Density(m) => format!("m{m}"),
+        ResolutionRule::Nested { density, levels } => format!("m{density}/{levels}"),
+        ResolutionRule::Fixed([x, y, z]) => format!("{x}x{y}x{z}"),
+    };
+    let mut label = String::new();
+    if p.root != d.root {
+        label += &format!(" root={}", rule(p.root));
+    }
+    if p.children != d.children {
+        label += &format!(" children={}", rule(p.children));
+    }
+    if !p.fit_children {
+        label += " unfitted";
+    }
+    label
 }
 
 impl fmt::Display for AccelConfig {
@@ -580,6 +635,79 @@ mod tests {
             }
         };
         check(&mesh.cast::<f32>().unwrap());
+    }
+
+    /// Every field that shapes a tree shows in the label: two configurations
+    /// one field apart (from any preset) never share a label, as in the
+    /// fast-build preset with 16 bins against the default with the fast
+    /// build's binning and depth, which differ in clipping and leaf size.
+    #[test]
+    fn configs_that_shape_different_trees_get_different_labels() {
+        type KdEdit = fn(&mut KdTreeParams);
+        let kd_edits: [KdEdit; 12] = [
+            |p| p.intersect_cost += 1.0,
+            |p| p.traversal_cost += 1.0,
+            |p| p.empty_bonus = 0.1,
+            |p| p.max_depth = Some(9),
+            |p| p.depth_base += 1.0,
+            |p| p.leaf_size += 1,
+            |p| p.binned_above = 7,
+            |p| p.bins = 16,
+            |p| p.clip_above = 500,
+            |p| p.tighten_above = 100,
+            |p| p.flat_part = !p.flat_part,
+            |p| p.layout = Layout::Packed,
+        ];
+        type OctreeEdit = fn(&mut OctreeParams);
+        let octree_edits: [OctreeEdit; 7] = [
+            |p| p.root = ResolutionRule::Fixed([3, 3, 3]),
+            |p| p.children = ResolutionRule::Density(2.5),
+            |p| p.split_threshold += 1,
+            |p| p.max_depth -= 1,
+            |p| p.fit_children = !p.fit_children,
+            |p| p.flat_part = !p.flat_part,
+            |p| p.layout = Layout::Packed,
+        ];
+        let mut configs = Vec::new();
+        for name in KDTREE_PRESETS {
+            let preset = kdtree_preset(name).unwrap();
+            configs.push(AccelConfig::KdTree(preset.clone()));
+            for edit in kd_edits {
+                let mut p = preset.clone();
+                edit(&mut p);
+                // Clipping and tightening shape only the fast build.
+                if p.binned_above == 0 || preset.binned_above == 0 {
+                    configs.push(AccelConfig::KdTree(p));
+                }
+            }
+        }
+        for name in OCTREE_PRESETS {
+            let preset = octree_preset(name).unwrap();
+            configs.push(AccelConfig::Octree(preset.clone()));
+            for edit in octree_edits {
+                let mut p = preset.clone();
+                edit(&mut p);
+                configs.push(AccelConfig::Octree(p));
+            }
+        }
+        let mut fast_16 = KdTreeParams::fast_build();
+        fast_16.bins = 16;
+        let binned_16 = KdTreeParams {
+            binned_above: 0,
+            bins: 16,
+            depth_base: fast_16.depth_base,
+            traversal_cost: fast_16.traversal_cost,
+            ..KdTreeParams::default()
+        };
+        configs.push(AccelConfig::KdTree(fast_16));
+        configs.push(AccelConfig::KdTree(binned_16));
+        for (i, a) in configs.iter().enumerate() {
+            for b in &configs[..i] {
+                if a != b {
+                    assert_ne!(a.label(), b.label(), "{a:?}\n{b:?}");
+                }
+            }
+        }
     }
 
     #[test]
