@@ -118,7 +118,7 @@ fn bug2_f64_zero_area_triangle_hit_lies_on_the_triangle() {
 /// 1e-51) in T, where they underflowed to 0, so every triangle the line met
 /// got t = ±0; and the primitive tests only refused a parameter that
 /// overflowed T, not one that underflowed. Fixed: the depths are scaled in the
-/// wide type (`accel-core/src/triangle.rs`), and one rule in
+/// wide type (`accel-core/src/triangle/mod.rs`), and one rule in
 /// `accel-core/src/real.rs` (`Real::hit_parameter`, used by the triangle and
 /// sphere tests) refuses a parameter below T's normal range unless it is
 /// exactly 0.
@@ -153,7 +153,7 @@ fn bug3_f32_parameter_that_underflows_is_no_hit() {
 /// vertices) with a NaN coordinate built without complaint in every
 /// accelerator: `Triangle::bounds` takes min and max of the vertices, and
 /// min/max drop a NaN, so the bounds looked finite. Fixed in
-/// `accel-core/src/triangle.rs`: a non-finite vertex gives infinite bounds,
+/// `accel-core/src/triangle/mod.rs`: a non-finite vertex gives infinite bounds,
 /// as `Sphere::bounds` already did, and every build refuses it.
 #[test]
 fn bug4_nan_vertex_of_a_plain_triangle_is_refused() {
