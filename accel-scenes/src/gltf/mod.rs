@@ -11,9 +11,15 @@
 //! view and buffer) before they are read, and a node hierarchy with a cycle
 //! is refused. Skins and morph targets are ignored (the rest pose is used).
 
-use crate::{Camera, GeneratedScene, Z_UP};
+mod checks;
+mod shared;
+
 use accel_core::glam;
 use accel_core::{MeshError, TriangleMesh, Vec3};
+use checks::{check_accessor, check_attribute_indices, check_buffer_uris};
+pub use shared::{
+    BenchScene, bench_scenes, shared_scene_files, shared_scene_files_for_test, shared_scenes_dir,
+};
 use std::path::{Path, PathBuf};
 
 /// Why a glTF file could not be loaded.
@@ -179,95 +185,6 @@ fn triangles(mode: gltf::mesh::Mode, idx: &[u32]) -> Vec<[u32; 3]> {
             .collect(),
         _ => idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
     }
-}
-
-/// Checks that `accessor` holds elements of one of `types` × `dims` and lies
-/// within its buffer view and buffer, so that the `gltf` reader (which
-/// asserts or slices on these) can read it; a problem is described in words.
-fn check_accessor(
-    accessor: &gltf::Accessor<'_>,
-    types: &[gltf::accessor::DataType],
-    dims: gltf::accessor::Dimensions,
-    buffers: &[gltf::buffer::Data],
-) -> Result<(), String> {
-    if !types.contains(&accessor.data_type()) || accessor.dimensions() != dims {
-        return Err(format!(
-            "holds {:?} {:?} elements, expected {:?} of {:?}",
-            accessor.dimensions(),
-            accessor.data_type(),
-            dims,
-            types
-        ));
-    }
-    let size = accessor.size();
-    let count = accessor.count();
-    if count == 0 {
-        return Ok(());
-    }
-    if let Some(view) = accessor.view() {
-        let stride = view.stride().unwrap_or(size);
-        check_extent(&view, accessor.offset(), stride, size, count, buffers)?;
-    }
-    if let Some(sparse) = accessor.sparse() {
-        let n = sparse.count();
-        if n == 0 || n > count {
-            return Err(format!("has {n} sparse entries for {count} elements"));
-        }
-        let indices = sparse.indices();
-        let index_size = indices.index_type().size();
-        check_extent(
-            &indices.view(),
-            indices.offset(),
-            index_size,
-            index_size,
-            n,
-            buffers,
-        )?;
-        let values = sparse.values();
-        check_extent(&values.view(), values.offset(), size, size, n, buffers)?;
-    }
-    Ok(())
-}
-
-/// Checks that `count` elements of `size` bytes every `stride` bytes from
-/// `offset` lie within `view`, and `view` within its buffer.
-fn check_extent(
-    view: &gltf::buffer::View<'_>,
-    offset: usize,
-    stride: usize,
-    size: usize,
-    count: usize,
-    buffers: &[gltf::buffer::Data],
-) -> Result<(), String> {
-    if stride < size {
-        return Err(format!(
-            "has a byte stride of {stride}, less than its element size {size}"
-        ));
-    }
-    let end = (count - 1)
-        .checked_mul(stride)
-        .and_then(|b| b.checked_add(size))
-        .and_then(|b| b.checked_add(offset));
-    if end.is_none_or(|e| e > view.length()) {
-        return Err(format!(
-            "reaches past the end of buffer view {} ({} bytes)",
-            view.index(),
-            view.length()
-        ));
-    }
-    let buffer_len = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
-    if view
-        .offset()
-        .checked_add(view.length())
-        .is_none_or(|e| e > buffer_len)
-    {
-        return Err(format!(
-            "reads buffer view {}, which reaches past the end of buffer {} ({buffer_len} bytes)",
-            view.index(),
-            view.buffer().index()
-        ));
-    }
-    Ok(())
 }
 
 struct Loader<'a> {
@@ -445,115 +362,6 @@ impl Loader<'_> {
     }
 }
 
-/// Refuses buffer URIs that could read outside the file's own folder or
-/// without end (issue 32, item 2): a security rule, not a glTF one. An
-/// external buffer must be a relative path with no `..` component, no
-/// scheme but `data:`, naming a regular file (not `/dev/zero`, a FIFO or a
-/// symlink to one) that, symbolic links resolved, still lies in the folder.
-/// The file of each external buffer, in buffer order (`None` for `data:`
-/// URIs and the binary chunk).
-fn check_buffer_uris(
-    path: &Path,
-    document: &gltf::Document,
-) -> Result<Vec<Option<PathBuf>>, LoadError> {
-    let refuse = |index: usize, uri: &str, why: &str| LoadError::Gltf {
-        path: path.to_owned(),
-        message: format!("buffer {index} uri {uri:?} refused: {why}"),
-    };
-    let folder = path.parent().unwrap_or(Path::new("."));
-    let mut files = Vec::new();
-    for buffer in document.buffers() {
-        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
-            files.push(None);
-            continue;
-        };
-        if uri.starts_with("data:") {
-            files.push(None);
-            continue;
-        }
-        let index = buffer.index();
-        // Checked as the importer reads it: percent-decoded.
-        let Ok(decoded) = urlencoding::decode(uri) else {
-            return Err(refuse(index, uri, "not valid percent-encoded UTF-8"));
-        };
-        let decoded = decoded.as_ref();
-        if decoded.contains(':') || decoded.starts_with('/') || decoded.starts_with('\\') {
-            return Err(refuse(
-                index,
-                uri,
-                "only relative paths inside the file's folder are read",
-            ));
-        }
-        if decoded.contains('\\') {
-            return Err(refuse(
-                index,
-                uri,
-                "backslashes are not path separators here",
-            ));
-        }
-        let relative = Path::new(decoded);
-        if relative.components().any(|c| {
-            !matches!(
-                c,
-                std::path::Component::Normal(_) | std::path::Component::CurDir
-            )
-        }) {
-            return Err(refuse(index, uri, "it leaves the file's folder"));
-        }
-        let target = folder.join(relative);
-        let cannot_read = |e: std::io::Error| LoadError::Gltf {
-            path: path.to_owned(),
-            message: format!(
-                "buffer {index} file {} cannot be read: {e}",
-                target.display()
-            ),
-        };
-        match std::fs::metadata(&target) {
-            Ok(meta) if meta.is_file() => {}
-            Ok(_) => return Err(refuse(index, uri, "not a regular file")),
-            Err(e) => return Err(cannot_read(e)),
-        }
-        // A symbolic link (the file or a folder on the way) may lead out.
-        let real = std::fs::canonicalize(&target).map_err(cannot_read)?;
-        let real_folder = std::fs::canonicalize(folder).map_err(cannot_read)?;
-        if !real.starts_with(&real_folder) {
-            return Err(refuse(
-                index,
-                uri,
-                "a symbolic link leads out of the file's folder",
-            ));
-        }
-        files.push(Some(real));
-    }
-    Ok(files)
-}
-
-/// Refuses a mesh attribute that names an accessor the file does not have.
-fn check_attribute_indices(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
-    let accessors = root.accessors.len();
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            for (semantic, index) in &primitive.attributes {
-                if index.value() >= accessors {
-                    let name = match semantic {
-                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
-                        gltf::json::validation::Checked::Invalid => "an unknown".to_owned(),
-                    };
-                    return Err(LoadError::Gltf {
-                        path: path.to_owned(),
-                        message: format!(
-                            "not a valid glTF file: mesh {m} primitive {p}: the {name} attribute \
-                             names accessor {}, but the file has {accessors}",
-                            index.value()
-                        ),
-                    });
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Every buffer's bytes, never more than its declared `byteLength`: an
 /// external file is read through a limit of that length (a regular file in
 /// the folder, [`check_buffer_uris`]), `data:` URIs and the binary chunk
@@ -665,107 +473,6 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
         mesh,
         cameras: loader.cameras,
     })
-}
-
-/// The folder of shared test and benchmark meshes (`../shared/scenes` beside
-/// the workspace, or `$ACCEL_SCENES`), if it exists.
-#[must_use]
-pub fn shared_scenes_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ACCEL_SCENES").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes"),
-        PathBuf::from,
-    );
-    dir.is_dir().then_some(dir)
-}
-
-/// The `.glb` and `.gltf` files of [`shared_scenes_dir`], sorted by name;
-/// empty when the folder is absent.
-#[must_use]
-pub fn shared_scene_files() -> Vec<PathBuf> {
-    let Some(dir) = shared_scenes_dir() else {
-        return Vec::new();
-    };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .into_iter()
-        .flatten()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("glb" | "gltf")))
-        .collect();
-    files.sort();
-    files
-}
-
-/// A scene of the criterion benches: its name, its mesh in `f32`, and the
-/// camera its coherent rays come from.
-#[derive(Clone, Debug)]
-pub struct BenchScene {
-    /// The generated scene's name, or the file's stem.
-    pub name: String,
-    /// The triangles, in `f32`.
-    pub mesh: TriangleMesh<f32>,
-    /// The generated scene's own camera, or [`Camera::frame`] of the file's
-    /// bounds from `(0.3, -1, 0.4)`, `Z_UP`.
-    pub camera: Camera,
-}
-
-/// The scenes every structure crate's criterion bench runs on: each
-/// [`GeneratedScene`], then each of [`shared_scene_files`], whose name
-/// `wanted` accepts (a file is read only then). A file that does not load,
-/// or does not fit `f32`, is passed over.
-///
-/// # Panics
-/// If a generated scene did not fit `f32`; every one does.
-#[must_use]
-pub fn bench_scenes(wanted: impl Fn(&str) -> bool) -> Vec<BenchScene> {
-    let mut out: Vec<BenchScene> = GeneratedScene::ALL
-        .iter()
-        .filter(|s| wanted(s.name()))
-        .map(|&s| BenchScene {
-            name: s.name().to_owned(),
-            mesh: s.mesh().cast().expect("generated scenes fit f32"),
-            camera: s.camera(),
-        })
-        .collect();
-    for path in shared_scene_files() {
-        let name = path
-            .file_stem()
-            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-        if !wanted(&name) {
-            continue;
-        }
-        let Ok(scene) = load(&path) else { continue };
-        let Ok(mesh) = scene.mesh.cast() else {
-            continue;
-        };
-        let camera = Camera::frame(&scene.mesh.bounds(), Vec3::new(0.3, -1.0, 0.4), Z_UP);
-        out.push(BenchScene { name, mesh, camera });
-    }
-    out
-}
-
-/// The shared scene files for a test that needs them: `None` (the test
-/// skips, saying so) when `$ACCEL_SCENES` is not set and `../shared/scenes`
-/// is absent.
-///
-/// # Panics
-/// When `$ACCEL_SCENES` is set (CI sets it where the folder exists) but
-/// names no folder holding `.glb`/`.gltf` files: a run that asked for the
-/// shared scenes must not pass without testing them.
-#[must_use]
-pub fn shared_scene_files_for_test() -> Option<Vec<PathBuf>> {
-    let files = shared_scene_files();
-    match std::env::var_os("ACCEL_SCENES") {
-        Some(dir) if files.is_empty() => panic!(
-            "ACCEL_SCENES={} holds no .glb or .gltf files: the shared-scene tests cannot run",
-            Path::new(&dir).display()
-        ),
-        _ if files.is_empty() => {
-            eprintln!("skipped: no shared scenes (../shared/scenes absent, $ACCEL_SCENES not set)");
-            None
-        }
-        _ => Some(files),
-    }
 }
 
 #[cfg(test)]
