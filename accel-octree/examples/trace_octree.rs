@@ -1,11 +1,12 @@
-//! Builds an octree of nested grids over a generated scene and traces rays
+//! Builds an octree of nested grids over a scene and traces rays
 //! through it, printing the throughput and the work per ray: a small driver
 //! for profilers
 //! (`valgrind --tool=callgrind target/release/examples/trace_octree teapot_in_stadium`).
 //!
-//! Usage: `trace_octree [SCENE] [camera|random] [RAYS]`, SCENE one of
-//! sphere_100k, soup_100k, terrain_1m, teapot_in_stadium (default
-//! teapot_in_stadium).
+//! Usage: `trace_octree [SCENE] [camera|random] [RAYS]`, SCENE a generated
+//! scene (sphere_100k, soup_100k, terrain_1m, teapot_in_stadium,
+//! flat_field; default teapot_in_stadium) or a `.gltf`/`.glb` file, seen as
+//! `render` sees it.
 
 use accel_octree::Octree;
 use accel_scenes::TraceDriver;

@@ -6,7 +6,8 @@
 //! ([`accel_core::check_bundle`]).
 //!
 //! Usage: `bundles [SCENE] [camera|random] [RAYS] [ACCEL] [RAY FILE]`
-//! (scene, ray kind and count as accel-grid's `trace`; `ACCEL` as
+//! (scene, ray kind and count as accel-grid's `trace`: a generated scene or
+//! a `.gltf`/`.glb` file, seen as `render` sees it; `ACCEL` as
 //! `render --accel` takes it, default `grid`; a ray file written by
 //! `render bench --write-rays` replaces the rays). The environment variable
 //! `BUNDLES_ONLY=single|bundles` runs one of the two (for profilers).

@@ -10,7 +10,7 @@
 //! automatically (glTF is y-up).
 
 use accel_core::{Aabb, MeshError, TriangleMesh, Vec3};
-use accel_scenes::gltf::{self, LoadError, SceneCamera};
+use accel_scenes::gltf::{self, LoadError};
 use accel_scenes::{Camera, GeneratedScene, Y_UP, Z_UP, box_mesh, random_soup, torus, uv_sphere};
 use std::path::{Path, PathBuf};
 
@@ -376,51 +376,15 @@ fn view_from(camera: Camera, up: Vec3<f64>, focus: Vec3<f64>) -> View {
     }
 }
 
-/// A camera from the file's description, if it is usable.
-fn file_camera(c: &SceneCamera) -> Result<Camera, &'static str> {
-    let finite = c.eye.is_finite() && c.forward.is_finite() && c.up.is_finite();
-    if !finite || c.forward.length_squared() == 0.0 {
-        return Err("its transform is degenerate");
-    }
-    let Some(yfov) = c.yfov else {
-        return Err("it is orthographic");
-    };
-    if !(yfov > 0.0 && yfov < core::f64::consts::PI) {
-        return Err("its field of view is out of range");
-    }
-    Ok(Camera::look_at(
-        c.eye,
-        c.eye + c.forward,
-        c.up,
-        yfov.to_degrees(),
-    ))
-}
-
-/// Loads a glTF file: its first camera if usable, else automatic framing
-/// from the front, right and above (glTF is y-up).
+/// Loads a glTF file, seen through its first camera if usable, else framed
+/// automatically ([`gltf::Scene::view`]).
 ///
 /// # Errors
 /// [`SceneError::Load`] naming the file and the problem.
 pub fn file_scene(path: &Path) -> Result<Scene, SceneError> {
     let loaded = gltf::load(path)?;
     let bounds = loaded.mesh.bounds();
-    let mut notes = Vec::new();
-    let camera = match loaded.cameras.first().map(file_camera) {
-        Some(Ok(camera)) => {
-            notes.push("camera: the file's first camera".to_owned());
-            camera
-        }
-        Some(Err(why)) => {
-            notes.push(format!(
-                "camera: framed automatically (the file's first camera is unusable: {why})"
-            ));
-            Camera::frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
-        }
-        None => {
-            notes.push("camera: framed automatically (the file has none)".to_owned());
-            Camera::frame(&bounds, Vec3::new(0.55, 0.45, 1.0), Y_UP)
-        }
-    };
+    let (camera, note) = loaded.view();
     Ok(Scene {
         name: path.display().to_string(),
         mesh: loaded.mesh,
@@ -429,7 +393,7 @@ pub fn file_scene(path: &Path) -> Result<Scene, SceneError> {
             albedo: GREY,
         }],
         view: view_from(camera, Y_UP, bounds.center()),
-        notes,
+        notes: vec![note],
     })
 }
 

@@ -13,6 +13,7 @@
 
 mod checks;
 mod shared;
+mod view;
 
 use accel_core::glam;
 use accel_core::{MeshError, TriangleMesh, Vec3};
@@ -476,7 +477,7 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     // See: issue 32, item 2 (buffer URIs read /dev/zero until memory ran out).
@@ -631,8 +632,9 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
-    /// The square as one mesh under `nodes`, its buffer inline.
-    fn square_under(dir: &Path, name: &str, nodes: &str) -> PathBuf {
+    /// The square as one mesh under `nodes`, its buffer inline (the crate's
+    /// tests share it).
+    pub(crate) fn square_under(dir: &Path, name: &str, nodes: &str) -> PathBuf {
         write_gltf(
             dir,
             name,
