@@ -404,6 +404,18 @@ pub struct DialArgs {
     /// down to the leaf they start in.
     #[arg(long)]
     pub kdtree_no_flat_part: bool,
+    /// kD-tree nodes of at most N primitives become leaves without an SAH
+    /// search (0: the SAH alone decides).
+    #[arg(long, value_name = "N")]
+    pub kdtree_leaf_size: Option<u32>,
+    /// The fast build's (--kdtree-binned-above 0) exact clipping of
+    /// straddling triangles, in nodes over N primitives; `max` never.
+    #[arg(long, value_name = "N", value_parser = binned_above_parser)]
+    pub kdtree_clip_above: Option<usize>,
+    /// The fast build's cheaper tightening of straddlers' boxes to the
+    /// triangle's halves, in nodes over N primitives; `max` never.
+    #[arg(long, value_name = "N", value_parser = binned_above_parser)]
+    pub kdtree_tighten_above: Option<usize>,
 }
 
 impl DialArgs {
@@ -490,6 +502,21 @@ impl DialArgs {
             "--kdtree-no-flat-part",
             AccelKind::KdTree,
         );
+        add(
+            self.kdtree_leaf_size.is_some(),
+            "--kdtree-leaf-size",
+            AccelKind::KdTree,
+        );
+        add(
+            self.kdtree_clip_above.is_some(),
+            "--kdtree-clip-above",
+            AccelKind::KdTree,
+        );
+        add(
+            self.kdtree_tighten_above.is_some(),
+            "--kdtree-tighten-above",
+            AccelKind::KdTree,
+        );
         given
     }
 
@@ -569,6 +596,15 @@ impl DialArgs {
                 }
                 if self.kdtree_no_flat_part {
                     p.flat_part = false;
+                }
+                if let Some(n) = self.kdtree_leaf_size {
+                    p.leaf_size = n;
+                }
+                if let Some(n) = self.kdtree_clip_above {
+                    p.clip_above = n;
+                }
+                if let Some(n) = self.kdtree_tighten_above {
+                    p.tighten_above = n;
                 }
                 if let Some(l) = self.layout {
                     p.layout = l.layout();
@@ -775,6 +811,33 @@ mod tests {
             AccelConfig::KdTree(p).label(),
             "kdtree ci=5 ct=1 eb=0.3 no-flat"
         );
+        // The fast build's own dials, on top of its preset, and named.
+        let cli = parse(&[
+            "--accel",
+            "kdtree",
+            "--kdtree-preset",
+            "fast-build",
+            "--kdtree-leaf-size",
+            "4",
+            "--kdtree-clip-above",
+            "1000",
+            "--kdtree-tighten-above",
+            "max",
+        ])
+        .unwrap();
+        let AccelConfig::KdTree(p) = cli.render.dials.config(AccelKind::KdTree) else {
+            panic!("not a kd-tree")
+        };
+        assert_eq!(
+            (p.leaf_size, p.clip_above, p.tighten_above),
+            (4, 1000, usize::MAX)
+        );
+        assert_eq!(p.bins, kdtree_preset("fast-build").unwrap().bins);
+        assert_eq!(
+            AccelConfig::KdTree(p).label(),
+            "kdtree ci=5 ct=2 eb=0.3 binned>0/32 db=3 ls=4 clip>1000"
+        );
+        assert!(parse(&["--accel", "kdtree", "--kdtree-clip-above", "some"]).is_err());
         let cli = parse(&["--accel", "octree", "--octree-no-flat-part"]).unwrap();
         let AccelConfig::Octree(p) = cli.render.dials.config(AccelKind::Octree) else {
             panic!("not an octree")
