@@ -107,16 +107,11 @@ fn scene(name: &str) -> Result<(TriangleMesh<f64>, Camera), String> {
     if let Some(scene) = GeneratedScene::from_name(name) {
         return Ok((scene.mesh(), scene.camera()));
     }
-    // As `render` tells names from files: an extension, a folder, or a
-    // file that exists.
     #[cfg(feature = "gltf")]
-    {
-        let path = std::path::Path::new(name);
-        if path.extension().is_some() || path.components().count() > 1 || path.exists() {
-            let scene = crate::gltf::load(path).map_err(|e| e.to_string())?;
-            let (camera, _) = scene.view();
-            return Ok((scene.mesh, camera));
-        }
+    if crate::gltf::names_a_file(name) {
+        let scene = crate::gltf::load(std::path::Path::new(name)).map_err(|e| e.to_string())?;
+        let (camera, _) = scene.view();
+        return Ok((scene.mesh, camera));
     }
     let known: Vec<&str> = GeneratedScene::ALL.iter().map(|s| s.name()).collect();
     let files = if cfg!(feature = "gltf") {

@@ -76,10 +76,8 @@ impl SceneSource {
         if let Some(g) = GeneratedScene::from_name(arg) {
             return Ok(Self::Generated(g));
         }
-        let path = PathBuf::from(arg);
-        let looks_like_file = path.extension().is_some() || path.components().count() > 1;
-        if looks_like_file || path.exists() {
-            Ok(Self::File(path))
+        if gltf::names_a_file(arg) {
+            Ok(Self::File(PathBuf::from(arg)))
         } else {
             Err(SceneError::Unknown {
                 name: arg.to_owned(),

@@ -23,6 +23,16 @@ pub use shared::{
 };
 use std::path::{Path, PathBuf};
 
+/// Whether a scene argument names a file rather than a scene by name: it
+/// has an extension or a folder, or such a file exists. `render` and the
+/// profiling drivers ([`crate::TraceDriver`]) tell the two apart by this
+/// rule, so that a file's loading error names it.
+#[must_use]
+pub fn names_a_file(arg: &str) -> bool {
+    let path = Path::new(arg);
+    path.extension().is_some() || path.components().count() > 1 || path.exists()
+}
+
 /// Why a glTF file could not be loaded.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
