@@ -85,6 +85,36 @@ fn sweep_equals_naive_on_a_parallel_build() {
 }
 
 #[test]
+fn fast_build_on_one_thread_equals_the_build_in_pieces() {
+    // On two threads the fast build splits nodes over the threshold into
+    // pieces built in parallel and joined afterwards; on one thread it
+    // builds the whole tree serially. The trees must be the same.
+    let mut mesh = random_soup(3000, 7);
+    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 2000))
+        .unwrap();
+    let params = KdTreeParams {
+        parallel_threshold: 64,
+        ..KdTreeParams::fast_build()
+    };
+    let pool = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    };
+    for mesh in [mesh.clone(), teapot_in_stadium(3000, 1.0e4)] {
+        let serial = pool(1).install(|| KdTree::with_params(&mesh, &params).unwrap());
+        let pieces = pool(2).install(|| KdTree::with_params(&mesh, &params).unwrap());
+        assert!(
+            serial.nodes().len() > 1000,
+            "{} nodes",
+            serial.nodes().len()
+        );
+        assert_same_tree(&serial, &pieces);
+    }
+}
+
+#[test]
 fn binned_splits_near_the_root_cost_little_and_answer_exactly() {
     // Sweep above 64 primitives replaced by 32 bins: the tree is valid,
     // differs from the exact one, stays within 5% of its SAH cost (the bins

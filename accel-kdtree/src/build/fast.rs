@@ -139,13 +139,22 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
 ) -> Piece<T> {
     let mut scratch = Scratch::default();
     let mut out = Out::new();
-    if items.len() < ctx.params.parallel_threshold.max(2) {
-        // Room for the straddlers' copies along a path, and the output
-        // (about as many references and nodes as items), without regrowth.
-        let n = items.len();
-        items.reserve(n);
-        out.nodes.reserve(n);
-        out.refs.reserve(2 * n);
+    // On one thread the halves would be built one after the other anyway:
+    // the whole subtree goes serially, without splitting the items into
+    // vectors of their own and relocating the pieces' nodes afterwards
+    // (bunny, one thread: 4% fewer build instructions).
+    let small = items.len() < ctx.params.parallel_threshold.max(2);
+    if small || rayon::current_num_threads() == 1 {
+        if small {
+            // Room for the straddlers' copies along a path, and the output
+            // (about as many references and nodes as items), without
+            // regrowth. A whole tree's worth reserved up front instead
+            // faulted in more fresh pages per build than growing does.
+            let n = items.len();
+            items.reserve(n);
+            out.nodes.reserve(n);
+            out.refs.reserve(2 * n);
+        }
         build_serial(ctx, &mut items, 0, node, &mut out, &mut scratch);
         return Piece::Flat(out);
     }
