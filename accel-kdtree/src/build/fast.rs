@@ -78,12 +78,22 @@ impl<T: Real> Item<T> {
 /// The fewest bins a node is priced with.
 const MIN_BINS: usize = 4;
 
-/// What one task reuses from node to node: the bin counts and a leaf's
-/// sorted indices.
-#[derive(Default)]
-struct Scratch {
+/// What one task reuses from node to node: the bin counts, a leaf's
+/// sorted indices and the straddlers' triangles of a split.
+struct Scratch<T> {
     counts: Box<Counts>,
     leaf: Vec<u32>,
+    triangles: Vec<Option<[Vec3<T>; 3]>>,
+}
+
+impl<T> Default for Scratch<T> {
+    fn default() -> Self {
+        Self {
+            counts: Box::default(),
+            leaf: Vec::new(),
+            triangles: Vec::new(),
+        }
+    }
 }
 
 /// Builds the tree of one part: `list` (global indices) with bounds
@@ -185,7 +195,8 @@ fn build_piece<T: Real, P: PrimitiveSet<T> + ?Sized>(
         }
         Step::Split(s) => {
             ctx.count_inner();
-            let (mid, tight_below, tight_above) = split(ctx, &mut items, 0, &node.cell, &s);
+            let (mid, tight_below, tight_above) =
+                split(ctx, &mut items, 0, &node.cell, &s, &mut scratch.triangles);
             let below = items.split_off(mid);
             let (lo, hi) = children(
                 &node,
@@ -267,7 +278,7 @@ fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
     start: usize,
     mut node: Node<T>,
     out: &mut Out<T>,
-    scratch: &mut Scratch,
+    scratch: &mut Scratch<T>,
 ) {
     loop {
         match step(ctx, &buf[start..], &node, &mut scratch.counts) {
@@ -295,7 +306,8 @@ fn build_serial<T: Real, P: PrimitiveSet<T> + ?Sized>(
             Step::Split(s) => {
                 ctx.count_inner();
                 let at = out.push_inner(s.axis, s.pos);
-                let (mid, tight_below, tight_above) = split(ctx, buf, start, &node.cell, &s);
+                let (mid, tight_below, tight_above) =
+                    split(ctx, buf, start, &node.cell, &s, &mut scratch.triangles);
                 let (lo, hi) = children(
                     &node,
                     &s,
@@ -668,6 +680,7 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
     start: usize,
     cell: &Aabb<T>,
     split: &Split<T>,
+    triangles: &mut Vec<Option<[Vec3<T>; 3]>>,
 ) -> (usize, Aabb<T>, Aabb<T>) {
     let (k, p) = (split.axis, split.pos);
     debug_assert!(buf[start..].iter().all(|it| {
@@ -689,7 +702,18 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
     // Each straddler's upper part replaces it (packed down over the ones
     // with none), its lower part is appended after the below-only items.
     let clip = ctx.params.clip_above < end - start;
-    let tighten = ctx.params.tighten_above < end - start;
+    let tighten = !clip && ctx.params.tighten_above < end - start;
+    // The straddlers' triangles fetched first, in a loop of their own: the
+    // fetches (cache misses in a large mesh) overlap there, where each
+    // waited in turn behind the previous straddler's work before.
+    triangles.clear();
+    if tighten {
+        triangles.extend(
+            buf[above..below]
+                .iter()
+                .map(|it| ctx.prims.watertight_triangle(it.index() as usize)),
+        );
+    }
     let mut kept = above;
     for j in above..below {
         let it = buf[j];
@@ -707,7 +731,7 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
             let (mut lo, mut hi) = (it.bounds(), it.bounds());
             lo.max[k] = p;
             hi.min[k] = p;
-            if tighten && let Some([a, b, c]) = ctx.prims.watertight_triangle(it.index() as usize) {
+            if let Some(&Some([a, b, c])) = triangles.get(j - above) {
                 let [below_own, above_own] = triangle_halves_bounds(a, b, c, k, p);
                 (lo, hi) = (lo.intersection(&below_own), hi.intersection(&above_own));
             }
