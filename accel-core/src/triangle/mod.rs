@@ -7,7 +7,9 @@ mod clip;
 
 pub use clip::{clip_triangle_bounds, clip_triangle_bounds_split, triangle_halves_bounds};
 
-pub use crate::triangle_box::{TriangleBoxTest, triangle_overlaps_boxes};
+pub use crate::triangle_box::{
+    BLOCK_MAX_CELLS, TriangleBoxTest, triangle_overlaps_boxes, triangle_overlaps_cells,
+};
 use crate::{Aabb, PreparedRay, PrimHit, Primitive, Real, Vec3};
 
 /// The watertight ray–triangle test of Woop, Benthin & Wald (JCGT 2013).
