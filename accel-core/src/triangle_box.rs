@@ -242,11 +242,23 @@ pub fn triangle_overlaps_boxes<T: Real>(
     let bounds = vertex_bounds(&vertices);
     let mut test = None;
     for (b, o) in boxes.iter().zip(out) {
-        *o = settled_by_vertices(&bounds, &vertices, b).unwrap_or_else(|| {
-            test.get_or_insert_with(|| TriangleBoxTest::with_bounds(vertices, bounds))
-                .axes_allow(b)
-        });
+        *o = meets(&vertices, &bounds, &mut test, b);
     }
+}
+
+/// [`TriangleBoxTest::overlaps`] of the triangle of `vertices` (with
+/// `bounds`) for box `b`, preparing `test` the first time a box needs it.
+#[inline]
+fn meets<T: Real>(
+    vertices: &[Vec3<T>; 3],
+    bounds: &Aabb<T>,
+    test: &mut Option<TriangleBoxTest<T>>,
+    b: &Aabb<T>,
+) -> bool {
+    settled_by_vertices(bounds, vertices, b).unwrap_or_else(|| {
+        test.get_or_insert_with(|| TriangleBoxTest::with_bounds(*vertices, *bounds))
+            .axes_allow(b)
+    })
 }
 
 /// The most cells per axis of a block that [`triangle_overlaps_cells`]
@@ -294,11 +306,7 @@ pub fn triangle_overlaps_cells<T: Real>(
                     boundaries[2][c[2] + 1],
                 ),
             };
-            let meets = settled_by_vertices(&bounds, &vertices, &b).unwrap_or_else(|| {
-                test.get_or_insert_with(|| TriangleBoxTest::with_bounds(vertices, bounds))
-                    .axes_allow(&b)
-            });
-            if meets {
+            if meets(&vertices, &bounds, &mut test, &b) {
                 accept(c);
             }
         }
