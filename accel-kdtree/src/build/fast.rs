@@ -707,14 +707,12 @@ fn split<T: Real, P: PrimitiveSet<T> + ?Sized>(
             BoxSide::Both => !above && !below,
         }
     }));
-    let (above, below) = match k {
+    let (above, below, mut tight_above, mut tight_below) = match k {
         0 => three_way::<T, 0>(buf, start, p, split.planar_left),
         1 => three_way::<T, 1>(buf, start, p, split.planar_left),
         _ => three_way::<T, 2>(buf, start, p, split.planar_left),
     };
     let end = buf.len();
-    let mut tight_above = Tight::of(&buf[start..above]);
-    let mut tight_below = Tight::of(&buf[below..end]);
     // Each straddler's upper part replaces it (packed down over the ones
     // with none), its lower part is appended after the below-only items.
     let clip = ctx.params.clip_above < end - start;
@@ -789,16 +787,31 @@ fn sides<T: Real>(it: &Item<T>, k: usize, p: T, planar_left: bool) -> (bool, boo
 /// Orders `buf[start..]` above only, straddling, below only (on axis `K`
 /// at `p`) in place, by two Hoare partitions: items already on their side
 /// stay, which in a mesh's spatial order is most of them. Returns where
-/// the straddlers and the items below only begin.
+/// the straddlers and the items below only begin, and the boxes of the
+/// items above only and below only, grown as the partitions place them
+/// (not in passes of their own).
 fn three_way<T: Real, const K: usize>(
     buf: &mut [Item<T>],
     start: usize,
     p: T,
     planar_left: bool,
-) -> (usize, usize) {
-    let above = hoare(buf, start, |it| sides(it, K, p, planar_left).0);
-    let below = hoare(buf, above, |it| !sides(it, K, p, planar_left).1);
-    (above, below)
+) -> (usize, usize, Tight<T>, Tight<T>) {
+    let (mut tight_above, mut tight_below) = (Tight::empty(), Tight::empty());
+    let above = hoare(
+        buf,
+        start,
+        |it| sides(it, K, p, planar_left).0,
+        |it| tight_above.add(it),
+        |_| {},
+    );
+    let below = hoare(
+        buf,
+        above,
+        |it| !sides(it, K, p, planar_left).1,
+        |_| {},
+        |it| tight_below.add(it),
+    );
+    (above, below, tight_above, tight_below)
 }
 
 /// The box of some items' boxes, grown item by item with plain
@@ -809,16 +822,12 @@ struct Tight<T> {
 }
 
 impl<T: Real> Tight<T> {
-    /// The box of `items`.
-    fn of(items: &[Item<T>]) -> Self {
-        let mut t = Self {
+    /// The box of no items.
+    fn empty() -> Self {
+        Self {
             min: [T::INFINITY; 3],
             max: [T::NEG_INFINITY; 3],
-        };
-        for it in items {
-            t.add(it);
         }
-        t
     }
 
     #[inline(always)]
@@ -840,20 +849,32 @@ impl<T: Real> Tight<T> {
 
 /// Moves the items of `buf[start..]` for which `first` holds before the
 /// others (swapping only misplaced pairs); returns where the others begin.
+/// Each item is shown once to `placed_first` or `placed_other` as it
+/// reaches its final place.
 #[inline]
-fn hoare<T: Real>(buf: &mut [Item<T>], start: usize, first: impl Fn(&Item<T>) -> bool) -> usize {
+fn hoare<T: Real>(
+    buf: &mut [Item<T>],
+    start: usize,
+    first: impl Fn(&Item<T>) -> bool,
+    mut placed_first: impl FnMut(&Item<T>),
+    mut placed_other: impl FnMut(&Item<T>),
+) -> usize {
     let (mut lo, mut hi) = (start, buf.len());
     loop {
         while lo < hi && first(&buf[lo]) {
+            placed_first(&buf[lo]);
             lo += 1;
         }
         while lo < hi && !first(&buf[hi - 1]) {
+            placed_other(&buf[hi - 1]);
             hi -= 1;
         }
         if lo >= hi {
             return lo;
         }
         buf.swap(lo, hi - 1);
+        placed_first(&buf[lo]);
+        placed_other(&buf[hi - 1]);
         lo += 1;
         hi -= 1;
     }
