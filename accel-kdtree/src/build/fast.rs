@@ -355,6 +355,7 @@ fn push_leaf<T: Real, P: PrimitiveSet<T> + ?Sized>(
         }
         let n = leaf.len();
         leaf.copy_from_slice(&sorted[..n]);
+        debug_assert!(leaf.is_sorted_by(|a, b| a < b), "a leaf's indices repeat");
     } else {
         leaf.sort_unstable();
     }
