@@ -30,6 +30,16 @@ fn tiled_stadium(dense: usize, stadium: f64) -> TriangleMesh<f64> {
     sphere_in_tiled_box(dense, stadium, 20)
 }
 
+/// 3,000 soup triangles (seed `seed`) with a sphere of about `sphere`
+/// triangles at their centre: a scene large enough for the top levels to
+/// be built in parallel at a threshold of 64.
+fn soup_with_sphere(seed: u64, sphere: usize) -> TriangleMesh<f64> {
+    let mut mesh = random_soup(3000, seed);
+    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, sphere))
+        .unwrap();
+    mesh
+}
+
 /// The default parameters without a flat part ([`KdTreeParams::flat_part`]).
 fn one_tree() -> KdTreeParams {
     KdTreeParams {
@@ -42,9 +52,7 @@ fn one_tree() -> KdTreeParams {
 fn sweep_equals_naive_on_a_parallel_build() {
     // 3,000 soup triangles plus a sphere: the top levels are built in parallel
     // (threshold 64), the rest serially; the naive builder is serial throughout.
-    let mut mesh = random_soup(3000, 5);
-    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 800))
-        .unwrap();
+    let mesh = soup_with_sphere(5, 800);
     // And a sphere in a box 10^4 times wider: with walls tiled finely, one
     // tree whose isolating cuts do not count towards the depth limit (beside
     // a flat part of one face's tiles); with walls of two triangles each,
@@ -89,9 +97,7 @@ fn fast_build_on_one_thread_equals_the_build_in_pieces() {
     // On two threads the fast build splits nodes over the threshold into
     // pieces built in parallel and joined afterwards; on one thread it
     // builds the whole tree serially. The trees must be the same.
-    let mut mesh = random_soup(3000, 7);
-    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 2000))
-        .unwrap();
+    let mesh = soup_with_sphere(7, 2000);
     let params = KdTreeParams {
         parallel_threshold: 64,
         ..KdTreeParams::fast_build()
@@ -102,7 +108,7 @@ fn fast_build_on_one_thread_equals_the_build_in_pieces() {
             .build()
             .unwrap()
     };
-    for mesh in [mesh.clone(), teapot_in_stadium(3000, 1.0e4)] {
+    for mesh in [mesh, teapot_in_stadium(3000, 1.0e4)] {
         let serial = pool(1).install(|| KdTree::with_params(&mesh, &params).unwrap());
         let pieces = pool(2).install(|| KdTree::with_params(&mesh, &params).unwrap());
         assert!(
@@ -120,9 +126,7 @@ fn binned_splits_near_the_root_cost_little_and_answer_exactly() {
     // differs from the exact one, stays within 5% of its SAH cost (the bins
     // only approximate the plane, the sweep still chooses below), and every
     // ray answers as brute force.
-    let mut mesh = random_soup(3000, 5);
-    mesh.append(&uv_sphere(Vec3::new(0.5, 0.5, 0.5), 0.3, 800))
-        .unwrap();
+    let mesh = soup_with_sphere(5, 800);
     let exact = KdTreeParams {
         binned_above: usize::MAX,
         ..KdTreeParams::default()
