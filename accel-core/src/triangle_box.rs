@@ -70,13 +70,25 @@ impl<T: Real> TriangleBoxTest<T> {
         let edges = [q[1], q[2] - q[1], -q[2]];
         let zero = Wide::<T>::ZERO;
         let mut projections = [(zero, zero); 9];
-        for (j, &e) in edges.iter().enumerate() {
-            for k in 0..3 {
-                // Plain selects: the projections are finite for finite
-                // vertices, and a NaN one only makes its axis separate nothing.
-                let [a, b, c] = q.map(|v| dot_cross_unit(k, e, v));
-                projections[3 * j + k] = (lesser(lesser(a, b), c), greater(greater(a, b), c));
-            }
+        // Plain selects: the projections are finite for finite vertices, and
+        // a NaN one only makes its axis separate nothing.
+        let span = |a: Wide<T>, b: Wide<T>| (lesser(a, b), greater(a, b));
+        for k in 0..3 {
+            // An edge's two ends project to the same point of its own axes,
+            // and with `q0 = 0` that point is computed exactly for edges 0
+            // and 2: `(unit_k × q1)·q1` and `(unit_k × −q2)·q2` are each a
+            // difference of two equal products, exactly 0, as is every
+            // projection of `q0`. Those edges' intervals are then spanned by
+            // 0 and the opposite vertex alone, the same values as from all
+            // three; edge 1's ends, `q1` and `q2`, round apart and are both
+            // taken.
+            let (a, b) = (
+                dot_cross_unit(k, edges[1], q[1]),
+                dot_cross_unit(k, edges[1], q[2]),
+            );
+            projections[k] = span(zero, dot_cross_unit(k, edges[0], q[2]));
+            projections[3 + k] = (lesser(lesser(zero, a), b), greater(greater(zero, a), b));
+            projections[6 + k] = span(zero, dot_cross_unit(k, edges[2], q[1]));
         }
         let normal = edges[0].cross(edges[1]);
         let normal_error = edges[0].abs().max_component()
@@ -479,6 +491,47 @@ mod tests {
             assert!(met > 2000 && missed > 2000, "{met} met, {missed} missed");
             let [met, missed] = check_blocks::<f64>(seed + 10, offset);
             assert!(met > 2000 && missed > 2000, "{met} met, {missed} missed");
+        }
+    }
+
+    /// Each edge axis's projection interval is the one spanned by all three
+    /// vertices' projections, each computed as `dot_cross_unit` computes
+    /// it (equal as numbers: `−0` and `+0` compare equal), for triangles
+    /// of every shape and size near and far from the coordinate origin.
+    #[test]
+    fn projections_are_spanned_by_the_three_vertices() {
+        fn check<T: Real>(rng: &mut Rng, offset: f64, scale: f64) {
+            let mut point = || {
+                let p = v::<f64>(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                );
+                p.map(|c| T::from_f64(offset + c * scale))
+            };
+            let mut tri = [point(), point(), point()];
+            if rng.next_f64() < 0.2 {
+                tri[2] = tri[1]; // a segment
+            }
+            let test = TriangleBoxTest::new(tri[0], tri[1], tri[2]);
+            let origin = tri[0].map(T::to_wide);
+            let q = tri.map(|p| p.map(T::to_wide) - origin);
+            for (j, &e) in test.edges.iter().enumerate() {
+                for k in 0..3 {
+                    let [a, b, c] = q.map(|p| dot_cross_unit(k, e, p));
+                    let (lo, hi) = test.projections[3 * j + k];
+                    assert!(
+                        lo == a.min(b).min(c) && hi == a.max(b).max(c),
+                        "{tri:?} {j} {k}"
+                    );
+                }
+            }
+        }
+        let mut rng = Rng(5);
+        for i in 0..3000 {
+            let (offset, scale) = [(0.0, 1.0), (1.0e4, 0.5), (-3.0, 1.0e-3)][i % 3];
+            check::<f32>(&mut rng, offset, scale);
+            check::<f64>(&mut rng, offset, scale);
         }
     }
 }
