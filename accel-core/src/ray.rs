@@ -170,7 +170,9 @@ impl<T: Real> Ray<T> {
     pub fn heads_within(&self, other: &Ray<T>, cos: f64) -> bool {
         let (a, b) = (self.direction.cast::<f64>(), other.direction.cast::<f64>());
         let dot = a.dot(b);
-        dot > 0.0 && dot * dot >= cos * cos * a.dot(a) * b.dot(b)
+        // Bitwise, not short-circuit: rays heading every way (diffuse
+        // bounces) would make the branch a coin toss.
+        (dot > 0.0) & (dot * dot >= cos * cos * a.dot(a) * b.dot(b))
     }
 
     /// How many of `rays` head within the angle of `cos` of `self`

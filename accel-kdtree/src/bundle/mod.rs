@@ -71,12 +71,15 @@ fn octant<T: Real>(ray: &Ray<T>) -> Option<u8> {
 /// per ray, where the gathering looks at each ray three times (for the
 /// look-ahead, the octant and the heading, then for validity when handing
 /// out): kD bundles of camera rays on the sphere ran 12% faster with the
-/// grouping skipped altogether.
+/// grouping skipped altogether. The second ray's octant is asked first, so
+/// that rays heading every way (diffuse bounces, three times in four of
+/// another octant) are turned down before the pass.
 fn whole_packet<T: Real>(rays: &[Ray<T>]) -> bool {
     let first = &rays[0];
     let key = octant(first);
     rays.len() == PACKET
         && key.is_some()
+        && octant(&rays[1]) == key
         && rays.iter().fold(true, |ok, r| {
             ok & r.is_valid() & (octant(r) == key) & first.heads_within(r, COHERENT_COS)
         })
@@ -118,10 +121,10 @@ const LOOK_AHEAD: usize = 64;
 /// that go alone, for `visit`. [`LOOK_AHEAD`] rays that are whole packets
 /// of [`PACKET`] as they come ([`whole_packet`]; a tile of camera rays) are
 /// handed out as such at once. Elsewhere rays are gathered one by one:
-/// every [`LOOK_AHEAD`] rays where fewer than a quarter head with the first
-/// (diffuse bounces, random rays) go alone at once, and rays are validated
-/// only when they would join a packet (the others' single queries validate
-/// them anyway).
+/// every [`LOOK_AHEAD`] rays whose neighbours seldom head together
+/// ([`may_gather`]: diffuse bounces, random rays) go alone at once, and
+/// rays are validated only when they would join a packet (the others'
+/// single queries validate them anyway).
 fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
     let mut g = Gathered {
         index: [0; PACKET],
@@ -137,7 +140,7 @@ fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
             }
             continue;
         }
-        if 4 * chunk[0].count_heading_with(chunk, COHERENT_COS) < chunk.len() {
+        if !may_gather(chunk) {
             for i in base..base + chunk.len() {
                 visit(Group::Single(i));
             }
@@ -163,6 +166,31 @@ fn by_octant<T: Real>(rays: &[Ray<T>], mut visit: impl FnMut(Group<'_>)) {
         flush(rays, &mut g, &mut visit);
     }
 }
+
+/// Whether gathering `chunk`'s rays one by one could make packets, which
+/// are runs of consecutive rays of one octant heading together: at least
+/// half of the neighbours sampled (every [`NEIGHBOUR_STEP`]-th ray and the
+/// one before it) share their octant and head within the angle of
+/// [`COHERENT_COS`]. Four pairs, without a branch per pair, where every
+/// ray of the look-ahead was compared with its first before, each a
+/// branch that rays heading every way mispredict: callgrind, the flat
+/// field's diffuse rays in kD bundles, 1,260.5M → 1,228.9M instructions
+/// (single rays 1,183.8M).
+fn may_gather<T: Real>(chunk: &[Ray<T>]) -> bool {
+    let (mut sampled, mut together) = (0, 0);
+    for k in (1..chunk.len()).step_by(NEIGHBOUR_STEP) {
+        let (a, b) = (&chunk[k - 1], &chunk[k]);
+        let key = octant(a);
+        sampled += 1;
+        together +=
+            usize::from(key.is_some() & (key == octant(b)) & a.heads_within(b, COHERENT_COS));
+    }
+    2 * together >= sampled
+}
+
+/// The step between the neighbours [`may_gather`] asks: four pairs of a
+/// look-ahead of 64.
+const NEIGHBOUR_STEP: usize = 16;
 
 /// Hands out the gathered rays, as a packet if [`MIN_PACKET`] or more of
 /// them are valid (invalid ones go alone, to answer their error), and
@@ -654,5 +682,37 @@ mod tests {
             })
             .collect();
         assert_eq!(groups(&octants), (eighths(8), vec![]));
+    }
+
+    /// A look-ahead whose neighbours head every way (diffuse bounces: each
+    /// ray 90° from the one before, in another octant) goes alone at once,
+    /// ray by ray, though a quarter of it heads with its first ray; one
+    /// whose sampled neighbours mostly head together is gathered into
+    /// packets, even where some runs break.
+    #[test]
+    fn look_aheads_whose_neighbours_head_every_way_go_alone() {
+        let dirs = [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-3.0, 0.5, 1.0),
+            Vec3::new(1.0, -2.0, 3.0),
+            Vec3::new(3.0, 0.5, -1.0),
+        ];
+        // Every fourth ray is the first one's direction: a quarter heads
+        // with it, which gathered the look-ahead before.
+        let diffuse: Vec<Ray<f64>> = (0..64).map(|i| ray(dirs[i % 4])).collect();
+        assert!(!may_gather(&diffuse));
+        let (packets, singles) = groups(&diffuse);
+        assert!(packets.is_empty());
+        assert_eq!(singles, (0..64).collect::<Vec<_>>());
+        // Coherent, but every eighth ray of another octant: not whole
+        // packets, gathered into runs.
+        let plus = ray(Vec3::new(1.0, 2.0, 3.0));
+        let mut broken = vec![plus; 64];
+        for i in (7..64).step_by(8) {
+            broken[i] = ray(Vec3::new(-0.1, 2.0, 3.0));
+        }
+        assert!(may_gather(&broken));
+        let (packets, _) = groups(&broken);
+        assert_eq!(packets[0], (0..7).collect::<Vec<_>>());
     }
 }
