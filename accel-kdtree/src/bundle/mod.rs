@@ -80,9 +80,17 @@ fn whole_packet<T: Real>(rays: &[Ray<T>]) -> bool {
     rays.len() == PACKET
         && key.is_some()
         && octant(&rays[1]) == key
-        && rays.iter().fold(true, |ok, r| {
-            ok & r.is_valid() & (octant(r) == key) & first.heads_within(r, COHERENT_COS)
-        })
+        && rays
+            .iter()
+            .fold(true, |ok, r| ok & r.is_valid() & joins(first, key, r))
+}
+
+/// Whether `r` may share a packet with `first`, whose octant is `key`: of
+/// that octant, heading within the angle of [`COHERENT_COS`] of it. Without
+/// branches, for the look-ahead's passes over many rays.
+#[inline(always)]
+fn joins<T: Real>(first: &Ray<T>, key: Option<u8>, r: &Ray<T>) -> bool {
+    (octant(r) == key) & first.heads_within(r, COHERENT_COS)
 }
 
 /// The fewest rays walked as a packet: fewer go alone.
@@ -182,8 +190,7 @@ fn may_gather<T: Real>(chunk: &[Ray<T>]) -> bool {
         let (a, b) = (&chunk[k - 1], &chunk[k]);
         let key = octant(a);
         sampled += 1;
-        together +=
-            usize::from(key.is_some() & (key == octant(b)) & a.heads_within(b, COHERENT_COS));
+        together += usize::from(key.is_some() & joins(a, key, b));
     }
     2 * together >= sampled
 }
