@@ -129,7 +129,7 @@ pub use moller_trumbore::{MollerTrumboreMesh, TriangleTest};
 pub use primitive::{Primitive, PrimitiveSet};
 pub use ray::{PreparedRay, QueryError, Ray};
 pub use real::Real;
-pub use robust::{TRAVERSAL_ROUNDINGS, TraversalRay};
+pub use robust::{TRAVERSAL_ROUNDINGS, TraversalRay, WideBeam, WideRay};
 pub use sphere::Sphere;
 pub use triangle::Triangle;
 pub use vec3::Vec3;

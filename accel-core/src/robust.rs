@@ -71,15 +71,7 @@ impl<T: Real> TraversalRay<T> {
     #[inline]
     #[must_use]
     pub fn with_wide_hits(ray: &Ray<T>, bounds: &Aabb<T>) -> Option<Self> {
-        if ray.is_empty_interval() || bounds.is_empty() {
-            return None;
-        }
-        // Exact: `T::Wide` holds every `T` value.
-        let (o, d): (Vec3<T::Wide>, _) = (ray.origin.cast(), ray.direction.cast());
-        let b: Aabb<T::Wide> = bounds.cast();
-        let delta = <T::Wide as Real>::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, o);
-        let (t0, t1) = b.beam_interval_inv(o, d, PreparedRay::reciprocal(d), delta)?;
-        Self::from_wide_beam(ray, delta, t0, t1)
+        Self::from_wide(ray, WideRay::new(ray)?.beam(bounds)?)
     }
 
     /// [`TraversalRay::with_wide_hits`] for several rays through the same
@@ -128,24 +120,27 @@ impl<T: Real> TraversalRay<T> {
             *out = if !finite[l] {
                 Self::with_wide_hits(ray, bounds)
             } else if met[l] && !ray.is_empty_interval() {
-                Self::from_wide_beam(ray, beam[0][l], beam[1][l], beam[2][l])
+                let (delta, t0, t1) = (beam[0][l], beam[1][l], beam[2][l]);
+                Self::from_wide(ray, WideBeam { delta, t0, t1 })
             } else {
                 None
             };
         }
     }
 
-    /// The traversal ray of a wide beam of half-width `delta` entering the
-    /// bounds at `t0` and leaving at `t1`, each rounded outward to `T`, so
-    /// that the beam only grows.
+    /// The traversal ray of `ray`'s wide beam ([`WideRay::beam`]), its
+    /// half-width, entry and exit each rounded outward to `T`, so that the
+    /// beam only grows; `None` when nothing of it is left in the ray's
+    /// interval.
     #[inline(always)]
-    fn from_wide_beam(ray: &Ray<T>, delta: T::Wide, t0: T::Wide, t1: T::Wide) -> Option<Self> {
+    #[must_use]
+    pub fn from_wide(ray: &Ray<T>, beam: WideBeam<T::Wide>) -> Option<Self> {
         Self::clipped(
             ray,
             PreparedRay::reciprocal(ray.direction),
-            T::from_wide(delta).next_up(),
-            T::from_wide(t0).next_down(),
-            T::from_wide(t1).next_up(),
+            T::from_wide(beam.delta).next_up(),
+            T::from_wide(beam.t0).next_down(),
+            T::from_wide(beam.t1).next_up(),
         )
     }
 
@@ -222,6 +217,64 @@ impl<T: Real> TraversalRay<T> {
         let (lo, hi) = (T::from_wide(lo).next_down(), T::from_wide(hi).next_up());
         let g = T::gamma(4);
         (lo - lo.abs() * g, hi + hi.abs() * g)
+    }
+}
+
+/// A ray's origin and reciprocal direction in [`Real::Wide`], for its thin
+/// beams ([`TraversalRay::with_wide_hits`]) through several boxes: a
+/// structure in parts (a small dense part apart, a floor apart) casts and
+/// divides once per query, not once per part.
+#[derive(Clone, Copy, Debug)]
+pub struct WideRay<W> {
+    origin: Vec3<W>,
+    direction: Vec3<W>,
+    inv_dir: Vec3<W>,
+}
+
+/// The wide beam of a ray through a box, in [`Real::Wide`], before it is
+/// rounded to `T` and clipped to the ray's interval
+/// ([`TraversalRay::from_wide`]).
+#[derive(Clone, Copy, Debug)]
+pub struct WideBeam<W> {
+    /// The beam's half-width.
+    delta: W,
+    /// The beam's entry into the box.
+    t0: W,
+    /// The beam's exit.
+    t1: W,
+}
+
+impl<W: Real> WideRay<W> {
+    /// The wide ray of `ray` (already validated); `None` when its interval
+    /// is empty, so that no beam of it holds anything.
+    #[inline(always)]
+    #[must_use]
+    pub fn new<T: Real<Wide = W>>(ray: &Ray<T>) -> Option<Self> {
+        if ray.is_empty_interval() {
+            return None;
+        }
+        // Exact: `T::Wide` holds every `T` value.
+        let direction: Vec3<W> = ray.direction.cast();
+        Some(Self {
+            origin: ray.origin.cast(),
+            direction,
+            inv_dir: PreparedRay::reciprocal(direction),
+        })
+    }
+
+    /// The beam of half-width `gamma(64)` (of the wide type) of the
+    /// farthest corner of `bounds`, entered in the wide type; `None` when
+    /// it misses the bounds.
+    #[inline(always)]
+    #[must_use]
+    pub fn beam<T: Real<Wide = W>>(&self, bounds: &Aabb<T>) -> Option<WideBeam<W>> {
+        if bounds.is_empty() {
+            return None;
+        }
+        let b: Aabb<W> = bounds.cast();
+        let delta = W::gamma(TRAVERSAL_ROUNDINGS) * reach(&b, self.origin);
+        let (t0, t1) = b.beam_interval_inv(self.origin, self.direction, self.inv_dir, delta)?;
+        Some(WideBeam { delta, t0, t1 })
     }
 }
 
