@@ -131,7 +131,8 @@ impl<T: Real> TraversalRay<T> {
     /// The traversal ray of `ray`'s wide beam ([`WideRay::beam`]), its
     /// half-width, entry and exit each rounded outward to `T`, so that the
     /// beam only grows; `None` when nothing of it is left in the ray's
-    /// interval.
+    /// interval. `beam` must be of this very ray (from
+    /// [`WideRay::new`]`(ray)`): another ray's beam would not hold its hits.
     #[inline(always)]
     #[must_use]
     pub fn from_wide(ray: &Ray<T>, beam: WideBeam<T::Wide>) -> Option<Self> {
