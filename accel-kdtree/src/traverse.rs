@@ -333,28 +333,43 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         counter: &mut C,
     ) -> Result<Option<Hit<T>>, QueryError> {
         ray.validate()?;
-        if !self.primitives().wide_hits() {
-            let mut best = None;
-            for part in &self.parts {
-                best = self.nearest_in(part, ray, Entry::Plain, best, counter);
-            }
-            return Ok(best);
-        }
-        let Some(wide) = WideRay::new(ray) else {
+        let Some(wide) = self.wide_ray(ray) else {
             return Ok(None);
         };
         if self.parts.len() == 1 {
-            return Ok(wide.beam(&self.first.bounds).and_then(|beam| {
-                self.nearest_in(&self.first, ray, Entry::Wide(beam), None, counter)
-            }));
+            return Ok(Self::entry(&wide, &self.first)
+                .and_then(|entry| self.nearest_in(&self.first, ray, entry, None, counter)));
         }
         let mut best = None;
         for part in &self.parts {
-            if let Some(beam) = wide.beam(&part.bounds) {
-                best = self.nearest_in(part, ray, Entry::Wide(beam), best, counter);
+            if let Some(entry) = Self::entry(&wide, part) {
+                best = self.nearest_in(part, ray, entry, best, counter);
             }
         }
         Ok(best)
+    }
+
+    /// `ray`'s wide form, cast and divided once for all the parts, where
+    /// the primitives' hits are wide (`Some(None)` where they are not);
+    /// `None` when the ray's interval is empty, so nothing can be hit.
+    #[inline(always)]
+    fn wide_ray(&self, ray: &Ray<T>) -> Option<Option<WideRay<T::Wide>>> {
+        if self.primitives().wide_hits() {
+            WideRay::new(ray).map(Some)
+        } else {
+            (!ray.is_empty_interval()).then_some(None)
+        }
+    }
+
+    /// How the ray whose wide form is `wide` ([`KdTree::wide_ray`]) enters
+    /// `part`: by its wide beam, `None` when that misses the part's bounds;
+    /// plainly where the primitives' hits are not wide.
+    #[inline(always)]
+    fn entry(wide: &Option<WideRay<T::Wide>>, part: &KdPart<T>) -> Option<Entry<T::Wide>> {
+        match wide {
+            Some(wide) => wide.beam(&part.bounds).map(Entry::Wide),
+            None => Some(Entry::Plain),
+        }
     }
 
     /// The nearest of `best` and the hits in `part`, which `ray` enters by
@@ -387,23 +402,15 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         counter: &mut C,
     ) -> Result<bool, QueryError> {
         ray.validate()?;
-        if !self.primitives().wide_hits() {
-            return Ok(self
-                .parts
-                .iter()
-                .any(|part| self.any_in(part, ray, Entry::Plain, counter)));
-        }
-        let Some(wide) = WideRay::new(ray) else {
+        let Some(wide) = self.wide_ray(ray) else {
             return Ok(false);
         };
         if self.parts.len() == 1 {
-            return Ok(wide
-                .beam(&self.first.bounds)
-                .is_some_and(|beam| self.any_in(&self.first, ray, Entry::Wide(beam), counter)));
+            return Ok(Self::entry(&wide, &self.first)
+                .is_some_and(|entry| self.any_in(&self.first, ray, entry, counter)));
         }
         Ok(self.parts.iter().any(|part| {
-            wide.beam(&part.bounds)
-                .is_some_and(|beam| self.any_in(part, ray, Entry::Wide(beam), counter))
+            Self::entry(&wide, part).is_some_and(|entry| self.any_in(part, ray, entry, counter))
         }))
     }
 
