@@ -333,20 +333,47 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         counter: &mut C,
     ) -> Result<Option<Hit<T>>, QueryError> {
         ray.validate()?;
+        let mut best = None;
+        self.nearest_parts(ray, &mut best, counter);
+        Ok(best)
+    }
+
+    /// [`KdTree::nearest`] written into `slot`, for a bundle's ray that goes
+    /// alone: each part's walk leaves its best hit in the slot itself.
+    /// Returned and copied instead, the answer (32 bytes in `f32`) was read
+    /// back in 16-byte loads straddling the narrower stores that had just
+    /// written it, so no store forwarded: 80% of the bundle loop's own
+    /// samples (`perf`, the flat field's diffuse rays in `studies peers`).
+    #[inline(never)]
+    pub(crate) fn nearest_into(&self, ray: &Ray<T>, slot: &mut Result<Option<Hit<T>>, QueryError>) {
+        *slot = ray.validate().map(|()| None);
+        if let Ok(best) = slot {
+            self.nearest_parts(ray, best, &mut ());
+        }
+    }
+
+    /// The nearest of `best` and the hits of every part, left in `best`.
+    #[inline(always)]
+    fn nearest_parts<C: CostCounter>(
+        &self,
+        ray: &Ray<T>,
+        best: &mut Option<Hit<T>>,
+        counter: &mut C,
+    ) {
         let Some(wide) = self.wide_ray(ray) else {
-            return Ok(None);
+            return;
         };
         if self.parts.len() == 1 {
-            return Ok(Self::entry(&wide, &self.first)
-                .and_then(|entry| self.nearest_in(&self.first, ray, entry, None, counter)));
+            if let Some(entry) = Self::entry(&wide, &self.first) {
+                self.nearest_in(&self.first, ray, entry, best, counter);
+            }
+            return;
         }
-        let mut best = None;
         for part in &self.parts {
             if let Some(entry) = Self::entry(&wide, part) {
-                best = self.nearest_in(part, ray, entry, best, counter);
+                self.nearest_in(part, ray, entry, best, counter);
             }
         }
-        Ok(best)
     }
 
     /// `ray`'s wide form, cast and divided once for all the parts, where
@@ -373,25 +400,26 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
     }
 
     /// The nearest of `best` and the hits in `part`, which `ray` enters by
-    /// `entry`. Not inlined: the parts' loop keeps the ray's wide values in
-    /// registers (passed through memory, a part's loads straddled their
-    /// stores: the flat field's diffuse rays ran 5% slower with 9% fewer
-    /// instructions), and the walk's code is not copied per caller.
+    /// `entry`, left in `best`. Not inlined: the parts' loop keeps the
+    /// ray's wide values in registers (passed through memory, a part's
+    /// loads straddled their stores: the flat field's diffuse rays ran 5%
+    /// slower with 9% fewer instructions), and the walk's code is not
+    /// copied per caller.
     #[inline(never)]
     fn nearest_in<C: CostCounter>(
         &self,
         part: &KdPart<T>,
         ray: &Ray<T>,
         entry: Entry<T::Wide>,
-        best: Option<Hit<T>>,
+        best: &mut Option<Hit<T>>,
         counter: &mut C,
-    ) -> Option<Hit<T>> {
+    ) {
         let Some(tr) = entry.traversal_ray(ray, &part.bounds) else {
-            return best;
+            return;
         };
-        let mut v = self.nearest_visitor(&tr, best);
+        let mut v = self.nearest_visitor(&tr, *best);
         self.walk(part.root, &tr, &mut v, counter);
-        v.best
+        *best = v.best;
     }
 
     /// Any hit, part by part (each part entered as in

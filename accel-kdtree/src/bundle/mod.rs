@@ -252,12 +252,14 @@ trait Query<T: Real>: Copy {
         stack: &mut Stack<T>,
     ) -> [Self::Answer; PACKET];
 
-    /// The answer of a ray alone.
+    /// The answer of a ray alone, written into `slot` (see
+    /// [`KdTree::nearest_into`]).
     fn single<P: PrimitiveSet<T> + ?Sized, S: Borrow<P>>(
         self,
         tree: &KdTree<'_, T, P, S>,
         ray: &Ray<T>,
-    ) -> Result<Self::Answer, QueryError>;
+        slot: &mut Result<Self::Answer, QueryError>,
+    );
 }
 
 /// [`Query`] for the nearest hits.
@@ -299,8 +301,9 @@ impl<T: Real> Query<T> for NearestHits {
         self,
         tree: &KdTree<'_, T, P, S>,
         ray: &Ray<T>,
-    ) -> Result<Self::Answer, QueryError> {
-        tree.nearest(ray, &mut ())
+        slot: &mut Result<Self::Answer, QueryError>,
+    ) {
+        tree.nearest_into(ray, slot);
     }
 }
 
@@ -350,8 +353,9 @@ impl<T: Real> Query<T> for AnyHits {
         self,
         tree: &KdTree<'_, T, P, S>,
         ray: &Ray<T>,
-    ) -> Result<Self::Answer, QueryError> {
-        tree.any(ray, &mut ())
+        slot: &mut Result<Self::Answer, QueryError>,
+    ) {
+        *slot = tree.any(ray, &mut ());
     }
 }
 
@@ -395,7 +399,7 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
                     out[i] = Ok(answer);
                 }
             }
-            Group::Single(i) => out[i] = query.single(self, &rays[i]),
+            Group::Single(i) => query.single(self, &rays[i], &mut out[i]),
         });
     }
 
