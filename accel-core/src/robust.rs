@@ -116,15 +116,19 @@ impl<T: Real> TraversalRay<T> {
             finite[l] = (inv.x.abs() < inf) & (inv.y.abs() < inf) & (inv.z.abs() < inf);
             met[l] = t0 <= t1;
         }
+        // Each branch writes its lane itself: merged into one value first,
+        // the lane was copied out of a temporary in 32-byte loads that
+        // straddled the narrower stores that had just filled it (no store
+        // forwarding).
         for (l, (ray, out)) in rays.iter().zip(out).enumerate() {
-            *out = if !finite[l] {
-                Self::with_wide_hits(ray, bounds)
+            if !finite[l] {
+                *out = Self::with_wide_hits(ray, bounds);
             } else if met[l] && !ray.is_empty_interval() {
                 let (delta, t0, t1) = (beam[0][l], beam[1][l], beam[2][l]);
-                Self::from_wide(ray, WideBeam { delta, t0, t1 })
+                *out = Self::from_wide(ray, WideBeam { delta, t0, t1 });
             } else {
-                None
-            };
+                *out = None;
+            }
         }
     }
 
