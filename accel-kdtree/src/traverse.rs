@@ -414,11 +414,16 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         best: &mut Option<Hit<T>>,
         counter: &mut C,
     ) {
-        let Some(tr) = entry.traversal_ray(ray, &part.bounds) else {
+        // Borrowed where it was built: moved out of the option, the ray was
+        // copied in 16-byte loads straddling the 4-byte stores that had
+        // just written its beam (no store forwarding; 3% of the walk's
+        // samples, the sphere's camera rays 4% slower).
+        let entered = entry.traversal_ray(ray, &part.bounds);
+        let Some(tr) = &entered else {
             return;
         };
-        let mut v = self.nearest_visitor(&tr, *best);
-        self.walk(part.root, &tr, &mut v, counter);
+        let mut v = self.nearest_visitor(tr, *best);
+        self.walk(part.root, tr, &mut v, counter);
         *best = v.best;
     }
 
@@ -482,11 +487,13 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> KdTree<'_, T, P, S> {
         entry: Entry<T::Wide>,
         counter: &mut C,
     ) -> bool {
-        let Some(tr) = entry.traversal_ray(ray, &part.bounds) else {
+        // Borrowed where it was built, as in `nearest_in`.
+        let entered = entry.traversal_ray(ray, &part.bounds);
+        let Some(tr) = &entered else {
             return false;
         };
-        let mut v = self.any_visitor(&tr);
-        self.walk(part.root, &tr, &mut v, counter);
+        let mut v = self.any_visitor(tr);
+        self.walk(part.root, tr, &mut v, counter);
         v.found
     }
 }
