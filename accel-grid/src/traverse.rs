@@ -208,15 +208,19 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
             return Ok(None);
         }
         if self.rest.is_empty() {
-            let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
+            // Borrowed where it was built: moved, it was copied in loads
+            // straddling the stores that had just written it (no store
+            // forwarding).
+            let entered = TraversalRay::new(ray, self.first.geometry.bounds());
+            let Some(tr) = &entered else {
                 return Ok(None);
             };
-            return Ok(self.first.nearest(self.primitives(), &tr, None, counter));
+            return Ok(self.first.nearest(self.primitives(), tr, None, counter));
         }
         let wide = self.primitives().wide_hits();
         Ok(self.parts().fold(None, |best, part| {
-            match part_beam(ray, part.geometry.bounds(), wide) {
-                Some(tr) => part.nearest(self.primitives(), &tr, best, counter),
+            match &part_beam(ray, part.geometry.bounds(), wide) {
+                Some(tr) => part.nearest(self.primitives(), tr, best, counter),
                 None => best,
             }
         }))
@@ -265,15 +269,18 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Grid<'_, T, P, S> {
             return Ok(false);
         }
         if self.rest.is_empty() {
-            let Some(tr) = TraversalRay::new(ray, self.first.geometry.bounds()) else {
+            // Borrowed where it was built, as in `nearest`.
+            let entered = TraversalRay::new(ray, self.first.geometry.bounds());
+            let Some(tr) = &entered else {
                 return Ok(false);
             };
-            return Ok(self.first.any(self.primitives(), &tr, counter));
+            return Ok(self.first.any(self.primitives(), tr, counter));
         }
         let wide = self.primitives().wide_hits();
         Ok(self.parts().any(|part| {
             part_beam(ray, part.geometry.bounds(), wide)
-                .is_some_and(|tr| part.any(self.primitives(), &tr, counter))
+                .as_ref()
+                .is_some_and(|tr| part.any(self.primitives(), tr, counter))
         }))
     }
 }

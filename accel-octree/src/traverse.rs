@@ -262,10 +262,14 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         }
         if self.parts == 1 {
             let root = &self.nodes[0];
-            let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+            // Borrowed where it was built: moved, it was copied in loads
+            // straddling the stores that had just written it (no store
+            // forwarding).
+            let entered = TraversalRay::new(ray, root.geometry.bounds());
+            let Some(tr) = &entered else {
                 return Ok(None);
             };
-            return Ok(self.nearest_from_root(&tr, counter));
+            return Ok(self.nearest_from_root(tr, counter));
         }
         // The ray is prepared (its shear takes three divisions) only once
         // a part's box is met: a ray that misses every part prepares nothing.
@@ -276,8 +280,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         let mut q = Nearest::new(self, tr.prepared, counter);
         q.walk(&roots[first], &tr, tr.t_start);
         for root in &roots[first + 1..] {
-            if let Some(tr) = self.part_beam(ray, root) {
-                q.walk(root, &tr, tr.t_start);
+            if let Some(tr) = &self.part_beam(ray, root) {
+                q.walk(root, tr, tr.t_start);
             }
         }
         Ok(q.best)
@@ -296,10 +300,12 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         }
         if self.parts == 1 {
             let root = &self.nodes[0];
-            let Some(tr) = TraversalRay::new(ray, root.geometry.bounds()) else {
+            // Borrowed where it was built, as in `nearest`.
+            let entered = TraversalRay::new(ray, root.geometry.bounds());
+            let Some(tr) = &entered else {
                 return Ok(false);
             };
-            return Ok(self.any_from_root(&tr, counter));
+            return Ok(self.any_from_root(tr, counter));
         }
         // Prepared only once a part's box is met, as in `nearest`.
         let roots = &self.nodes[..self.parts];
@@ -310,7 +316,8 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         Ok(q.walk(&roots[first], &tr, tr.t_start)
             || roots[first + 1..].iter().any(|root| {
                 self.part_beam(ray, root)
-                    .is_some_and(|tr| q.walk(root, &tr, tr.t_start))
+                    .as_ref()
+                    .is_some_and(|tr| q.walk(root, tr, tr.t_start))
             }))
     }
 
