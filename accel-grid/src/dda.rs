@@ -79,7 +79,10 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// Starts the walk at parameter `t_start` (inside or at the entry of the
     /// grid; the caller clips it with [`TraversalRay`] or a slab test).
     /// Returns the walk and the cells the beam touches at `t_start`.
-    #[inline]
+    /// Always inlined, so that the walk is built where its caller keeps it:
+    /// returned, it was copied (`memcpy`) in wide loads straddling the
+    /// narrower stores that had just written it (no store forwarding).
+    #[inline(always)]
     pub fn start(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>, t_start: T) -> (Self, CellBox) {
         let r = ray.ray();
         let (dir, delta) = (r.direction, ray.delta);
