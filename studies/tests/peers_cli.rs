@@ -50,7 +50,7 @@ fn peers_on_default(dir: &std::path::Path, args: &[&str]) -> (String, Value) {
 #[test]
 fn peers_runs_our_accelerators_and_names_the_missing_peers() {
     let dir = tempfile::tempdir().unwrap();
-    let (text, report) = peers_on_default(dir.path(), &["--build-rounds", "3"]);
+    let (text, report) = peers_on_default(dir.path(), &["--build-rounds", "3", "--rounds", "4"]);
     for name in ["grid", "octree", "kdtree"] {
         assert!(text.lines().any(|l| l.starts_with(name)), "{name}: {text}");
     }
@@ -122,6 +122,15 @@ fn peers_runs_our_accelerators_and_names_the_missing_peers() {
         .map(|k| k[0].as_str().unwrap().to_owned())
         .collect();
     assert_eq!(kinds, ["primary", "shadow", "diffuse"]);
+    // Every figure timed in four interleaved rounds, each giving it at
+    // least one pass.
+    assert_eq!(report["rounds"], 4);
+    for s in sets {
+        assert!(s["passes"].as_u64().unwrap() >= 4, "{s}");
+        for b in s["bundles"].as_array().unwrap() {
+            assert!(b["passes"].as_u64().unwrap() >= 4, "{s}");
+        }
+    }
     // Every tool built three times; the figure is the middle round.
     assert_eq!(report["build_rounds"], 3);
     for b in report["builds"].as_array().unwrap() {
@@ -178,16 +187,21 @@ fn peers_measures_only_the_tools_named() {
 }
 
 #[test]
-fn peers_refuses_a_build_round_count_out_of_range() {
+fn peers_refuses_a_round_count_out_of_range() {
     let dir = tempfile::tempdir().unwrap();
-    for bad in ["0", "101", "-1", "many"] {
-        let o = run(dir.path(), &["peers", "default", "--build-rounds", bad]);
-        assert!(!o.status.success(), "{bad} accepted");
-        assert!(
-            stderr(&o).contains("--build-rounds"),
-            "{bad}: {}",
-            stderr(&o)
-        );
+    for (flag, bad) in [
+        ("--build-rounds", "0"),
+        ("--build-rounds", "101"),
+        ("--build-rounds", "-1"),
+        ("--build-rounds", "many"),
+        ("--rounds", "0"),
+        ("--rounds", "1001"),
+        ("--rounds", "-2"),
+        ("--rounds", "few"),
+    ] {
+        let o = run(dir.path(), &["peers", "default", flag, bad]);
+        assert!(!o.status.success(), "{flag} {bad} accepted");
+        assert!(stderr(&o).contains(flag), "{flag} {bad}: {}", stderr(&o));
     }
 }
 

@@ -6,9 +6,11 @@
 //! features); build times are wall-clock. The rays are [`mod@render::bench`]'s
 //! (primary, shadow, diffuse, generated from the scene's view through our
 //! kD-tree) or a binary ray file's. Each tool traces each set once to record
-//! every answer, then repeats passes for at least `--min-time` seconds and
-//! [`MIN_PASSES`] passes; the figure is the median pass. Nearest hit for
-//! primary, diffuse and file rays, any hit for shadow rays.
+//! every answer; then every figure of the set (each tool's single rays and
+//! bundles) repeats passes for at least `--min-time` seconds and
+//! [`MIN_PASSES`] passes, in `--rounds` interleaved rounds ([`rounds`]); the
+//! figure is the median pass. Nearest hit for primary, diffuse and file
+//! rays, any hit for shadow rays.
 //!
 //! Beside each single-ray figure, a bundle figure: ours through
 //! [`Accelerator::intersect_bundle`] and [`Accelerator::occluded_bundle`],
@@ -32,6 +34,7 @@
 //! its own way.
 
 mod report;
+mod rounds;
 
 use super::{Agreement, PeerHit, PeerKind, PeerMesh, SetAnswers, T_TOLERANCE, compare};
 use accel::{AccelConfig, AccelKind};
@@ -40,6 +43,7 @@ use render::bench::{self, Answers, RayKind, RaySet};
 use render::cli::{min_time_parser, side_parser};
 use render::output::PendingFile;
 pub use report::report_lines;
+use rounds::Timed;
 
 use accel_core::{Accelerator, Hit, QueryError, Ray};
 use anyhow::{Context, Result, anyhow};
@@ -127,6 +131,12 @@ pub struct PeersArgs {
     /// timed build follows an untimed one of the same tool.
     #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=100), allow_negative_numbers = true)]
     pub build_rounds: u32,
+    /// Time the figures of each ray set (every tool's single rays and
+    /// bundles) in this many interleaved rounds, each giving each figure
+    /// `--min-time / N` seconds of passes: the figures share the host's
+    /// swings, so their ratios lose most of them.
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000), allow_negative_numbers = true)]
+    pub rounds: u32,
     /// Write the results as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -246,6 +256,8 @@ pub struct PeersReport {
     pub ray_sets: Vec<(RayKind, u64)>,
     /// Minimum timing per figure, seconds.
     pub min_time_s: f64,
+    /// Interleaved rounds the figures of a set were timed in.
+    pub rounds: u32,
 
     /// Relative `t` tolerance of the agreement checks.
     pub t_tolerance: f64,
@@ -638,6 +650,10 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         let indices: Vec<usize> = (0..set.rays.len()).collect();
         let order = set.bundle_order(&indices);
         let ordered = set.bundle_order(&set.rays);
+        // Every figure of the set, timed together once all are recorded.
+        let mut timed = Vec::new();
+        // Which figure each timed one is: (set figure, bundle figure).
+        let mut slots: Vec<(usize, Option<usize>)> = Vec::new();
         let stride = set.rays.len().div_ceil(PROBE_RAYS).max(1);
         let sample: Vec<Ray<f32>> = set.rays.iter().step_by(stride).copied().collect();
         for tool in &tools {
@@ -657,19 +673,6 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
             }
             let answers = tool.answers(set)?;
             let summary = answers.summary();
-            let mut timed = 0;
-            let times = bench::pass_times(min_time, MIN_PASSES, || -> Result<()> {
-                timed = black_box(tool.pass(any, black_box(&set.rays))?);
-                Ok(())
-            })?;
-            if timed != summary.hits {
-                println!(
-                    "warning: {} gave {} hits on {} rays when recording answers but {timed} when timed",
-                    tool.name(),
-                    summary.hits,
-                    set.kind.name()
-                );
-            }
             let (reference, ref_name) =
                 reference.get_or_insert_with(|| (answers.clone(), tool.name()));
             let agreement = compare(
@@ -680,22 +683,52 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
                 &set.rays,
                 EXAMPLES,
             );
+            let figure = figures.len();
+            slots.push((figure, None));
+            timed.push(Timed::new(summary.hits, move || {
+                tool.pass(any, black_box(&set.rays))
+            }));
             let mut bundles = Vec::new();
             for size in tool.bundle_sizes() {
-                bundles.push(measure_bundles(
-                    tool, size, set, &ordered, &order, &answers, min_time,
-                )?);
+                let coherent = coherent(set);
+                let bundle = bundle_figure(tool, size, coherent, set, &ordered, &order, &answers)?;
+                let ordered = &ordered;
+                slots.push((figure, Some(bundles.len())));
+                timed.push(Timed::new(bundle.answers.hits, move || {
+                    tool.bundle_pass(size, coherent, any, black_box(ordered))
+                }));
+                bundles.push(bundle);
             }
             figures.push(SetFigure {
                 name: tool.name().to_owned(),
                 kind: set.kind,
-                mrays: bench::rays_per_second(set.rays.len(), bench::median(&times)),
-                passes: times.len(),
+                mrays: 0.0,
+                passes: 0,
                 answers: summary,
                 reference: (*ref_name).to_owned(),
                 agreement,
                 bundles,
             });
+        }
+        rounds::time_interleaved(&mut timed, min_time, args.rounds, MIN_PASSES)?;
+        for ((figure, bundle), t) in slots.into_iter().zip(timed) {
+            let f = &mut figures[figure];
+            let (name, hits, mrays, passes) = match bundle {
+                None => (f.name.clone(), f.answers.hits, &mut f.mrays, &mut f.passes),
+                Some(b) => {
+                    let b = &mut f.bundles[b];
+                    let name = format!("{} in bundles of {}", f.name, b.rays_per_bundle);
+                    (name, b.answers.hits, &mut b.mrays, &mut b.passes)
+                }
+            };
+            *mrays = bench::rays_per_second(set.rays.len(), bench::median(&t.times));
+            *passes = t.times.len();
+            if let Some(other) = t.unexpected {
+                println!(
+                    "warning: {name} gave {hits} hits on {} rays when recording answers but {other} when timed",
+                    set.kind.name()
+                );
+            }
         }
     }
     let report = PeersReport {
@@ -704,6 +737,7 @@ fn measure(args: &PeersArgs, file_rays: Option<Vec<Ray<f32>>>) -> Result<PeersRe
         ray_source: source,
         ray_sets: sets.iter().map(|s| (s.kind, s.rays.len() as u64)).collect(),
         min_time_s: args.min_time,
+        rounds: args.rounds,
         build_rounds: args.build_rounds,
 
         t_tolerance: T_TOLERANCE,
@@ -731,37 +765,23 @@ fn coherent(set: &RaySet<f32>) -> bool {
 }
 
 /// `tool` on `set` through its bundle queries, `size` rays at a time over
-/// `ordered` (the set's rays in the order `order` gives): answers, checked
-/// against the tool's single-ray `single` ones, then timed passes.
+/// `ordered` (the set's rays in the order `order` gives): the answers,
+/// checked against the tool's single-ray `single` ones; the figure's
+/// throughput is left for the interleaved rounds ([`rounds`]).
 ///
 /// # Errors
 /// As [`Tool::bundle_answers`].
-fn measure_bundles(
+fn bundle_figure(
     tool: &Tool<'_>,
     size: usize,
+    coherent: bool,
     set: &RaySet<f32>,
     ordered: &[Ray<f32>],
     order: &[usize],
     single: &SetAnswers,
-    min_time: Duration,
 ) -> Result<BundleFigure> {
-    let any = set.kind.any_hit();
-    let coherent = coherent(set);
     let name = tool.name();
     let answers = tool.bundle_answers(size, coherent, set, ordered, order)?;
-    let summary = answers.summary();
-    let mut timed = 0;
-    let times = bench::pass_times(min_time, MIN_PASSES, || -> Result<()> {
-        timed = black_box(tool.bundle_pass(size, coherent, any, black_box(ordered))?);
-        Ok(())
-    })?;
-    if timed != summary.hits {
-        println!(
-            "warning: {name} in bundles of {size} gave {} hits on {} rays when recording answers but {timed} when timed",
-            summary.hits,
-            set.kind.name()
-        );
-    }
     let agreement = compare(
         single,
         &format!("{name} single"),
@@ -772,9 +792,9 @@ fn measure_bundles(
     );
     Ok(BundleFigure {
         rays_per_bundle: size,
-        mrays: bench::rays_per_second(set.rays.len(), bench::median(&times)),
-        passes: times.len(),
-        answers: summary,
+        mrays: 0.0,
+        passes: 0,
+        answers: answers.summary(),
         agreement,
     })
 }

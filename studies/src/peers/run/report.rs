@@ -270,8 +270,8 @@ pub fn report_lines(report: &PeersReport) -> Vec<String> {
     let kinds = kinds_of(report);
     let mut out = Vec::new();
     out.push(format!(
-        "scene {}: {} triangles; one thread; Mrays/s of the median pass (>= {MIN_PASSES} passes, >= {} s)",
-        report.scene, report.triangles, report.min_time_s
+        "scene {}: {} triangles; one thread; Mrays/s of the median pass (>= {MIN_PASSES} passes, >= {} s per figure, a set's figures in {} interleaved rounds)",
+        report.scene, report.triangles, report.min_time_s, report.rounds
     ));
     out.push(String::new());
     out.push(format!(
@@ -360,6 +360,7 @@ mod tests {
             ray_source: "generated".to_owned(),
             ray_sets: vec![(p, 100), (s, 100)],
             min_time_s: 0.0,
+            rounds: 1,
             t_tolerance: T_TOLERANCE,
             build_rounds: 1,
             builds: vec![
