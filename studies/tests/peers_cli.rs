@@ -206,6 +206,34 @@ fn peers_refuses_a_round_count_out_of_range() {
 }
 
 #[test]
+fn peers_skips_a_tool_whose_pass_would_take_too_long() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, report) = peers_on_default(
+        dir.path(),
+        &[
+            "--tools",
+            "grid,kdtree",
+            "--build-rounds",
+            "1",
+            "--max-pass-time",
+            "0",
+        ],
+    );
+    // No pass takes no time: every tool is skipped on every set, and says so.
+    let skipped = report["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 6, "{report}");
+    for kind in ["primary", "shadow", "diffuse"] {
+        for tool in ["grid", "kdtree"] {
+            assert!(
+                text.contains(&format!("{tool}: skipped on {kind} rays")),
+                "{tool} {kind}: {text}"
+            );
+        }
+    }
+    assert!(report["sets"].as_array().unwrap().is_empty(), "{report}");
+}
+
+#[test]
 fn peers_traces_a_ray_file_and_chosen_kinds() {
     let dir = tempfile::tempdir().unwrap();
     // A ray file as `render bench --write-rays` writes it.
