@@ -253,7 +253,12 @@ impl<T: Real> GridGeometry<T> {
     /// small offsets exact even far from the coordinate origin (the traversal
     /// passes the ray origin here). A point on a boundary belongs to the upper
     /// cell.
-    #[inline]
+    ///
+    /// Always inlined: a walk's restart locates the beam on each axis
+    /// (the octree's every child grid, the grid after each pass over empty
+    /// blocks), and a call per axis, which the inliner kept, cost the
+    /// octree's teapot in a stadium camera rays 4% of their speed.
+    #[inline(always)]
     #[must_use]
     pub fn axis_cell_relative(&self, axis: usize, origin: T, rel: T) -> u32 {
         let b = &self.boundaries[axis];
