@@ -11,7 +11,8 @@
 //! ratios lose most of them.
 
 use anyhow::Result;
-use std::time::{Duration, Instant};
+use render::bench;
+use std::time::Duration;
 
 /// One figure's timed pass and what it measured.
 pub(super) struct Timed<'a> {
@@ -37,19 +38,18 @@ impl<'a> Timed<'a> {
         }
     }
 
-    /// Runs passes until `slice` has gone by and at least `at_least` ran.
+    /// Runs passes until `slice` has gone by and at least `at_least` ran
+    /// ([`bench::pass_times`]).
     fn run_slice(&mut self, slice: Duration, at_least: usize) -> Result<()> {
-        let start = Instant::now();
-        let mut ran = 0;
-        while ran < at_least || start.elapsed() < slice {
-            let t0 = Instant::now();
-            let hits = std::hint::black_box((self.pass)()?);
-            self.times.push(t0.elapsed());
-            if hits != self.expected && self.unexpected.is_none() {
-                self.unexpected = Some(hits);
+        let (pass, expected, unexpected) = (&mut self.pass, self.expected, &mut self.unexpected);
+        let times = bench::pass_times(slice, at_least, || -> Result<()> {
+            let hits = std::hint::black_box(pass()?);
+            if hits != expected && unexpected.is_none() {
+                *unexpected = Some(hits);
             }
-            ran += 1;
-        }
+            Ok(())
+        })?;
+        self.times.extend(times);
         Ok(())
     }
 }
@@ -133,7 +133,7 @@ mod tests {
     #[test]
     fn each_figure_takes_its_slice_of_the_time() {
         let mut figures = [Timed::new(0, || Ok(0))];
-        let start = Instant::now();
+        let start = std::time::Instant::now();
         time_interleaved(&mut figures, Duration::from_millis(30), 3, 1).unwrap();
         assert!(start.elapsed() >= Duration::from_millis(30));
         assert!(figures[0].times.len() >= 3);
