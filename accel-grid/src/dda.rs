@@ -79,47 +79,60 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// Starts the walk at parameter `t_start` (inside or at the entry of the
     /// grid; the caller clips it with [`TraversalRay`] or a slab test).
     /// Returns the walk and the cells the beam touches at `t_start`.
-    /// Always inlined, so that the walk is built where its caller keeps it:
-    /// returned, it was copied (`memcpy`) in wide loads straddling the
+    ///
+    /// Hot callers take [`BeamWalk::unplaced`] and [`BeamWalk::restart`]
+    /// instead: returned after `restart` has written it through a
+    /// reference, the walk is copied (`memcpy`) in wide loads straddling the
     /// narrower stores that had just written it (no store forwarding).
-    #[inline(always)]
+    #[inline]
     pub fn start(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>, t_start: T) -> (Self, CellBox) {
+        let mut walk = Self::unplaced(geom, ray);
+        let cells = walk.restart(geom, t_start);
+        (walk, cells)
+    }
+
+    /// The walk of `ray` over `geom`, not yet placed: it opens no cell until
+    /// [`BeamWalk::restart`] places it at a parameter and returns the cells
+    /// the beam touches there. Always inlined and built by one struct
+    /// expression, so that it is written where the caller keeps it, which
+    /// then places it in place: [`BeamWalk::start`]'s copy is avoided.
+    #[inline(always)]
+    #[must_use]
+    pub fn unplaced(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>) -> Self {
         let r = ray.ray();
         let (dir, delta) = (r.direction, ray.delta);
-        let mut walk = Self {
+        let sign = |a: usize| {
+            if dir[a] > T::ZERO {
+                (1, 1, -delta)
+            } else if dir[a] < T::ZERO {
+                (-1, 0, delta)
+            } else {
+                (0, 0, T::ZERO)
+            }
+        };
+        let signs = [sign(0), sign(1), sign(2)];
+        Self {
             bounds: [geom.boundaries(0), geom.boundaries(1), geom.boundaries(2)],
             origin: r.origin,
             dir,
             inv_dir: ray.prepared.inv_dir,
             delta,
-            lead_off: [T::ZERO; 3],
-            up: [0; 3],
-            step: [0; 3],
+            lead_off: signs.map(|s| s.2),
+            up: signs.map(|s| s.1),
+            step: signs.map(|s| s.0),
             lead: [0; 3],
             trail: [0; 3],
             t_lead: [T::INFINITY; 3],
             t_trail: [T::INFINITY; 3],
             thin: false,
-            t_event: t_start,
-            t_settled: t_start,
-        };
-        for a in 0..3 {
-            if dir[a] > T::ZERO {
-                walk.step[a] = 1;
-                walk.up[a] = 1;
-                walk.lead_off[a] = -delta;
-            } else if dir[a] < T::ZERO {
-                walk.step[a] = -1;
-                walk.lead_off[a] = delta;
-            }
+            t_event: T::ZERO,
+            t_settled: T::ZERO,
         }
-        let cells = walk.restart(geom, t_start);
-        (walk, cells)
     }
 
     /// Starts this walk again, in place, at parameter `t` (as
     /// [`BeamWalk::start`], on the same grid `geom` and ray), and returns the
-    /// cells the beam touches there.
+    /// cells the beam touches there; places an [`BeamWalk::unplaced`] walk.
     #[inline]
     pub fn restart(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
         debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
@@ -550,7 +563,8 @@ mod tests {
 
     proptest::proptest! {
         /// A walk started again in place at `t` is the walk started at `t`:
-        /// the same first cells and the same steps after.
+        /// the same first cells and the same steps after; a walk not yet
+        /// placed opens no cell.
         #[test]
         fn restarting_in_place_is_starting_afresh(
             o in proptest::array::uniform3(-1.0..5.0f64),
@@ -571,6 +585,9 @@ mod tests {
             let (fresh, cells) = BeamWalk::start(&g, &tr, at(then));
             proptest::prop_assert_eq!(again, cells);
             proptest::prop_assert_eq!(steps(moved), steps(fresh));
+            // Not yet placed, a walk opens nothing.
+            let mut idle = BeamWalk::unplaced(&g, &tr);
+            proptest::prop_assert_eq!(idle.step(f64::INFINITY), Step::End);
         }
 
         /// The block walk made from a settled cell walk is the walk over the

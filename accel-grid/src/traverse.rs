@@ -115,7 +115,8 @@ impl<T: Real> GridPart<T> {
     {
         let ray = tr.ray();
         let mut mailbox = Mailbox::new();
-        let (mut walk, first) = BeamWalk::start(&self.geometry, tr, tr.t_start);
+        let mut walk = BeamWalk::unplaced(&self.geometry, tr);
+        let first = walk.restart(&self.geometry, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
             let mut empty = true;
@@ -160,7 +161,8 @@ impl<T: Real> GridPart<T> {
     {
         let ray = tr.ray();
         let mut mailbox = Mailbox::new();
-        let (mut walk, first) = BeamWalk::start(&self.geometry, tr, tr.t_start);
+        let mut walk = BeamWalk::unplaced(&self.geometry, tr);
+        let first = walk.restart(&self.geometry, tr.t_start);
         let mut cells = Step::Cells(first);
         loop {
             let mut found = false;

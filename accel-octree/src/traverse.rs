@@ -133,7 +133,8 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
     /// Walks grid `node` on beam `tr` from parameter `from` until its next
     /// cell lies past [`Nearest::limit`].
     fn walk(&mut self, node: &Node<T>, tr: &TraversalRay<T>, from: T) {
-        let (mut walk, first) = BeamWalk::start(&node.geometry, tr, from);
+        let mut walk = BeamWalk::unplaced(&node.geometry, tr);
+        let first = walk.restart(&node.geometry, from);
         let mut cells = first;
         loop {
             node.geometry
@@ -198,7 +199,8 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
     /// Walks grid `node` on beam `tr` from `from` to the end of the beam;
     /// true at the first hit.
     fn walk(&mut self, node: &Node<T>, tr: &TraversalRay<T>, from: T) -> bool {
-        let (mut walk, first) = BeamWalk::start(&node.geometry, tr, from);
+        let mut walk = BeamWalk::unplaced(&node.geometry, tr);
+        let first = walk.restart(&node.geometry, from);
         let mut cells = first;
         loop {
             let mut found = false;
