@@ -6,7 +6,7 @@ use clap::{Args, Parser, Subcommand};
 use render::cli::{side_parser, threads_parser};
 
 /// The workspace's studies: speed against accuracy, the grid density
-/// sweep, the chooser's check, and the peers.
+/// sweep, the chooser's check, the peers, and builds timed in alternation.
 ///
 /// SCENE is a `.gltf`/`.glb` file or a built-in scene, as for `render`:
 /// `default`, `sphere_100k`, `soup_100k`, `terrain_1m`,
@@ -24,7 +24,8 @@ Examples:
   studies tradeoff all --csv docs/tradeoff.csv --plot docs/tradeoff.png
   studies sweep-density all --plot docs/sweep-density.png
   studies choose-bench all
-  studies peers terrain_1m                 (peers: cargo run --release -p studies --features peers,embree)";
+  studies peers terrain_1m                 (peers: cargo run --release -p studies --features peers,embree)
+  BUNDLES_ONLY=single studies alternate --figure single --run '/tmp/old/bundles sphere_100k' --run 'target/release/examples/bundles sphere_100k'";
 
 /// Subcommands.
 #[derive(Debug, Subcommand)]
@@ -41,6 +42,9 @@ pub enum Command {
     /// `--features peers`; Embree 3 with `--features embree`) on the same
     /// scene and rays on one thread: Mrays/s, ratios, build times, agreement.
     Peers(crate::peers::run::PeersArgs),
+    /// Time two or more commands (two builds of one benchmark) in
+    /// alternation, round after round: medians, maxima and ratios.
+    Alternate(crate::alternate::AlternateArgs),
 }
 
 /// The options `tradeoff` and `sweep-density` share: the primary-ray view

@@ -10,5 +10,6 @@ fn main() -> ExitCode {
         Command::SweepDensity(args) => studies::sweep::run(args),
         Command::ChooseBench(args) => studies::choose_bench::run(args),
         Command::Peers(args) => studies::peers::run::run(args),
+        Command::Alternate(args) => studies::alternate::run(args),
     })
 }

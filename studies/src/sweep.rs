@@ -143,11 +143,6 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     write_csv_and_plot(csv_out, &csv(&rows), plot_out, &panels(&rows))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// Builds the grid of density `m` and times it on `sets`.
 fn sweep_one<T: Real>(
     mesh: &accel_core::TriangleMesh<T>,
@@ -188,7 +183,7 @@ fn sweep_one<T: Real>(
         density: m,
         cells_per_object: stats.nodes as f64 / n,
         refs_per_object: stats.references as f64 / n,
-        build_ms: median(builds),
+        build_ms: crate::median(builds),
         bytes: stats.bytes,
         mrays,
         mrays_all: if secs > 0.0 {

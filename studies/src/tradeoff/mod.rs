@@ -259,12 +259,6 @@ fn measure_in<T: Real>(
     }
 }
 
-/// Median of the values (upper median for even counts).
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
     s: &Setting,
     scene: &Scene,
@@ -347,7 +341,7 @@ fn measure_with<T: Real, P: PrimitiveSet<T> + ?Sized>(
         scene: short_name(&scene.name),
         triangles: mesh.triangle_count(),
         setting: s.clone(),
-        build_ms: median(builds),
+        build_ms: crate::median(builds),
         bytes: stats.bytes,
         mrays,
         mrays_all: if secs_total > 0.0 {
@@ -392,7 +386,7 @@ pub(crate) fn time_set<T: Real>(
         std::hint::black_box(hits);
         times.push(t.elapsed().as_secs_f64());
     }
-    Ok(median(times))
+    Ok(crate::median(times))
 }
 
 fn table_header() -> String {
@@ -579,6 +573,6 @@ mod tests {
         assert_eq!(all[0], "default");
         assert!(all.iter().any(|s| s == "terrain_1m"));
         assert_eq!(short_name("../shared/scenes/duck_4k.glb"), "duck_4k");
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(crate::median(vec![3.0, 1.0, 2.0]), 2.0);
     }
 }
