@@ -94,8 +94,9 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// The walk of `ray` over `geom`, not yet placed: it opens no cell until
     /// [`BeamWalk::restart`] places it at a parameter and returns the cells
     /// the beam touches there. Always inlined and built by one struct
-    /// expression, so that it is written where the caller keeps it, which
-    /// then places it in place: [`BeamWalk::start`]'s copy is avoided.
+    /// expression, so that it is written where the caller keeps it, and
+    /// `restart` places it there: no copy, where [`BeamWalk::start`]'s
+    /// returned walk is copied.
     #[inline(always)]
     #[must_use]
     pub fn unplaced(geom: &'g GridGeometry<T>, ray: &TraversalRay<T>) -> Self {
@@ -132,7 +133,7 @@ impl<'g, T: Real> BeamWalk<'g, T> {
 
     /// Starts this walk again, in place, at parameter `t` (as
     /// [`BeamWalk::start`], on the same grid `geom` and ray), and returns the
-    /// cells the beam touches there; places an [`BeamWalk::unplaced`] walk.
+    /// cells the beam touches there; places a [`BeamWalk::unplaced`] walk.
     #[inline]
     pub fn restart(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
         debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
