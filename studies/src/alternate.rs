@@ -62,12 +62,12 @@ pub fn run(args: &AlternateArgs) -> Result<()> {
 
 /// The order of the commands in round `round` (from 0): forward in even
 /// rounds, backward in odd ones.
-fn round_order(round: usize, n: usize) -> Box<dyn Iterator<Item = usize>> {
-    if round.is_multiple_of(2) {
-        Box::new(0..n)
-    } else {
-        Box::new((0..n).rev())
+fn round_order(round: usize, n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    if !round.is_multiple_of(2) {
+        order.reverse();
     }
+    order
 }
 
 /// Runs `command` and reads its figure after `word`.
@@ -146,9 +146,9 @@ mod tests {
 
     #[test]
     fn odd_rounds_run_backwards() {
-        assert_eq!(round_order(0, 3).collect::<Vec<_>>(), [0, 1, 2]);
-        assert_eq!(round_order(1, 3).collect::<Vec<_>>(), [2, 1, 0]);
-        assert_eq!(round_order(2, 3).collect::<Vec<_>>(), [0, 1, 2]);
+        assert_eq!(round_order(0, 3), [0, 1, 2]);
+        assert_eq!(round_order(1, 3), [2, 1, 0]);
+        assert_eq!(round_order(2, 3), [0, 1, 2]);
     }
 
     #[test]

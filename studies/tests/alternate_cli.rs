@@ -31,49 +31,33 @@ fn figures_of_two_commands_give_medians_and_their_ratio() {
     assert!(out.contains("| 5 | 5 | 2.500 | 5 5 5 |"), "{out}");
 }
 
-#[test]
-fn a_command_without_its_figure_or_that_fails_is_named() {
+/// Runs `studies alternate --figure FIGURE --run FIRST --run SECOND`,
+/// asserts that it fails without printing a table, and returns its stderr.
+fn failure(figure: &str, first: &str, second: &str) -> String {
     let o = run(&[
         "alternate",
         "--figure",
-        "single",
+        figure,
         "--run",
-        "echo single 1",
+        first,
         "--run",
-        "echo bundles 1",
+        second,
     ]);
-    let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
+    assert!(o.stdout.is_empty(), "no table from a failed run");
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn a_command_without_its_figure_or_that_fails_is_named() {
+    let err = failure("single", "echo single 1", "echo bundles 1");
     assert!(
         err.contains("echo bundles 1") && err.contains("no \"single\""),
         "{err}"
     );
-    assert!(o.stdout.is_empty(), "no table from a failed run");
-
-    let o = run(&[
-        "alternate",
-        "--figure",
-        "single",
-        "--run",
-        "echo single 1",
-        "--run",
-        "/nonexistent/bench single",
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let err = failure("single", "echo single 1", "/nonexistent/bench single");
     assert!(err.contains("cannot run /nonexistent/bench"), "{err}");
-
-    let o = run(&[
-        "alternate",
-        "--figure",
-        "x",
-        "--run",
-        "echo x 1",
-        "--run",
-        "false",
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let err = failure("x", "echo x 1", "false");
     assert!(err.contains("false failed"), "{err}");
 }
 
