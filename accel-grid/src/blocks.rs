@@ -16,8 +16,10 @@
 //! next crossing ([`BeamWalk::settled`], with margins for rounding). Every
 //! cell the beam touches after `t` lies in a block the beam touches after
 //! `t`, and the block walk visits those in order; the cells of the empty
-//! ones hold nothing. When it opens a block that holds something, at a
-//! computed crossing `t_e`, the cell walk starts again at
+//! ones hold nothing. When it opens a block that holds something (or one
+//! its beam enters while still in the last, where the walk would turn wide
+//! over two blocks: [`BeamWalk::pass_thin`] keeps to thin steps, in
+//! registers), at a computed crossing `t_e`, the cell walk starts again at
 //! `t_e − gamma(SETTLED_MARGIN)·|t_e|`, at or before the moment, exactly,
 //! that the beam first touched that block or any block opened after it, and
 //! from there visits every cell the beam touches. A cell visited twice only
@@ -198,18 +200,10 @@ impl<T: Real> Blocks<T> {
         from: T,
         limit: T,
     ) -> Step {
-        let mut blocks = walk.settled_block(&self.geometry, self.shift, from);
-        loop {
-            let occupied = match blocks.step(limit) {
-                Step::End => return Step::End,
-                Step::Cell(b) => self.occupied[self.geometry.linear_index(b)],
-                Step::Cells(range) => self.any_occupied(&range),
-            };
-            if occupied {
-                break;
-            }
-        }
-        let t = blocks.event_time();
+        let blocks = walk.settled_block(&self.geometry, self.shift, from);
+        let Some(t) = blocks.pass_thin(limit, &self.occupied) else {
+            return Step::End;
+        };
         let restart = (t - T::gamma(SETTLED_MARGIN) * t.abs()).max(tr.t_start);
         Step::Cells(walk.restart(geometry, restart))
     }

@@ -224,6 +224,71 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         walk
     }
 
+    /// Passes over the cells of this thin walk (one of blocks, from
+    /// [`BeamWalk::settled_block`]) that `occupied` (per cell, x fastest)
+    /// says hold nothing, and returns the parameter of the crossing that
+    /// opened the first one it does not pass over: one that holds
+    /// something, or one opened while the beam also spans another (the
+    /// walk would turn wide there; rare, since the beam is thin). `None`
+    /// when the walk ends first (at `limit`, or at the grid's far side).
+    ///
+    /// This is [`BeamWalk::step`]'s thin step with the axis dispatched to
+    /// code of its own ([`BeamWalk::thin_step_on`]): every index into the
+    /// walk is then a constant, so the walk, a copy owned by this loop,
+    /// lives in registers, where the general step reloads from memory what
+    /// its last step stored (indexed by the axis). The block's index moves
+    /// by a stride instead of being computed from its coordinates.
+    #[inline]
+    pub(crate) fn pass_thin(mut self, limit: T, occupied: &[bool]) -> Option<T> {
+        debug_assert!(self.thin);
+        let [nx, ny] = [0, 1].map(|a| self.bounds[a].len() - 1);
+        let stride = |a: usize, along: usize| along.wrapping_mul(self.step[a] as isize as usize);
+        let moves = [stride(0, 1), stride(1, nx), stride(2, nx * ny)];
+        let [x, y, z] = self.lead.map(|c| c as usize);
+        let mut index = x + nx * (y + ny * z);
+        loop {
+            let [t0, t1, t2] = self.t_lead;
+            let (a01, t01) = if t1 < t0 { (1, t1) } else { (0, t0) };
+            let (a, t) = if t2 < t01 { (2, t2) } else { (a01, t01) };
+            // As in `step`: +∞ ends the walk even when `limit` is +∞.
+            if !(t <= limit) || t == T::INFINITY {
+                return None;
+            }
+            let thin = match a {
+                0 => {
+                    index = index.wrapping_add(moves[0]);
+                    self.thin_step_on::<0>()
+                }
+                1 => {
+                    index = index.wrapping_add(moves[1]);
+                    self.thin_step_on::<1>()
+                }
+                _ => {
+                    index = index.wrapping_add(moves[2]);
+                    self.thin_step_on::<2>()
+                }
+            };
+            if !thin || occupied[index] {
+                return Some(t);
+            }
+        }
+    }
+
+    /// The thin step along axis `A`, whose crossing is the next event:
+    /// moves the lead and returns whether the walk stays thin (the trail
+    /// left behind catches up before the next event); the caller stops
+    /// stepping when it does not.
+    #[inline(always)]
+    fn thin_step_on<const A: usize>(&mut self) -> bool {
+        let old_lead = self.lead[A];
+        self.lead[A] = old_lead.wrapping_add_signed(self.step[A]);
+        self.t_lead[A] = self.lead_time(A);
+        let tau = self.time(A, self.exit_offset(A, old_lead) - self.lead_off[A]);
+        let [t0, t1, t2] = self.t_lead;
+        let t01 = if t1 < t0 { t1 } else { t0 };
+        tau <= if t2 < t01 { t2 } else { t01 }
+    }
+
     /// The parameter of the next lead crossing (`+∞` when the beam's front has
     /// reached the last cell on every axis).
     #[inline]
@@ -621,6 +686,60 @@ mod tests {
             let (fresh, first) = BeamWalk::start(&blocks, &tr, t);
             proptest::prop_assert_eq!(first, CellBox::single(cell.map(|c| c >> 2)));
             proptest::prop_assert_eq!(steps(handed), steps(fresh));
+        }
+
+        /// The thin pass over empty blocks stops where the general walk,
+        /// stepped over the same blocks, first opens an occupied one or
+        /// turns wide, at the same crossing bit for bit, and ends where it
+        /// ends.
+        #[test]
+        fn the_thin_pass_stops_where_the_walk_meets_a_block_or_turns_wide(
+            o in proptest::array::uniform3(-1.0..9.0f64),
+            d in proptest::array::uniform3(-1.0..1.0f64),
+            full in proptest::collection::vec(proptest::bool::weighted(0.08), 4 * 4 * 5),
+            limit_share in 0.0..1.5f64,
+            edge in proptest::option::of((0usize..3, 1usize..4, 1usize..4, 0.0..1.0f64)),
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(8.0, 7.0, 9.0)),
+                [16, 13, 18],
+            );
+            let blocks = g.coarsened(2);
+            proptest::prop_assert_eq!(blocks.cell_count(), full.len());
+            // Often through an inner edge of the blocks (two coordinates
+            // on their boundaries), where the beam comes to span two blocks
+            // and the pass stops.
+            let o = match edge {
+                Some((free, i, j, along)) => {
+                    let [u, v] = [(free + 1) % 3, (free + 2) % 3];
+                    let mut p = [0.0; 3];
+                    p[u] = blocks.boundaries(u)[i];
+                    p[v] = blocks.boundaries(v)[j];
+                    p[free] = along * g.bounds().max[free];
+                    [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
+                }
+                None => o,
+            };
+            let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
+            let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
+            let (w, _) = BeamWalk::start(&g, &tr, tr.t_start);
+            let Some((_, t)) = w.settled() else { return Ok(()) };
+            let limit = if limit_share > 1.0 {
+                f64::INFINITY
+            } else {
+                t + limit_share * (tr.t_end - t)
+            };
+            let mut general = w.settled_block(&blocks, 2, t);
+            let want = loop {
+                match general.step(limit) {
+                    Step::End => break None,
+                    Step::Cell(b) if general.thin && !full[blocks.linear_index(b)] => {}
+                    Step::Cell(_) => break Some(general.event_time()),
+                    Step::Cells(b) => panic!("a thin walk opened {b:?}"),
+                }
+            };
+            let got = w.settled_block(&blocks, 2, t).pass_thin(limit, &full);
+            proptest::prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
         }
 
         /// The beam's cells located once ([`BeamWalk::beam_cells`]) are
