@@ -36,6 +36,18 @@ pub enum Step {
     Cells(CellBox),
 }
 
+/// Where [`BeamWalk::pass`] stopped.
+#[derive(Clone, Copy, Debug)]
+enum Passed<T> {
+    /// The walk is over.
+    End,
+    /// It opened a cell that holds something.
+    Met,
+    /// Its last step, along the axis, turns it wide: its trail crosses at
+    /// the parameter, after the next event.
+    Widened(usize, T),
+}
+
 /// A beam walking the cells of one grid front to back.
 ///
 /// While the beam is *thin* (its trail equals its lead on every axis, so its
@@ -224,23 +236,66 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         walk
     }
 
-    /// Passes over the cells of this thin walk (one of blocks, from
-    /// [`BeamWalk::settled_block`]) that `occupied` (per cell, x fastest)
-    /// says hold nothing, and returns the parameter of the crossing that
-    /// opened the first one it does not pass over: one that holds
-    /// something, or one opened while the beam also spans another (the
-    /// walk would turn wide there; rare, since the beam is thin). `None`
-    /// when the walk ends first (at `limit`, or at the grid's far side).
+    /// As [`BeamWalk::step`], passing over the cells that `empty` (by
+    /// linear index in the walk's grid, x fastest, and by coordinates) says
+    /// to pass over (they hold nothing) while
+    /// the walk stays thin: returns the first step that opens a cell that
+    /// holds something, or turns the walk wide ([`Step::Cell`] of its lead,
+    /// as `step` returns it), or the end. A wide walk takes one general step.
     ///
-    /// This is [`BeamWalk::step`]'s thin step with the axis dispatched to
-    /// code of its own ([`BeamWalk::thin_step_on`]): every index into the
-    /// walk is then a constant, so the walk, a copy owned by this loop,
-    /// lives in registers, where the general step reloads from memory what
-    /// its last step stored (indexed by the axis). The block's index moves
-    /// by a stride instead of being computed from its coordinates.
+    /// The thin steps are those of [`BeamWalk::pass`], on a copy of the
+    /// walk in registers, written back once.
+    #[inline(always)]
+    pub fn step_past_empty(
+        &mut self,
+        limit: T,
+        empty: impl FnMut(usize, [u32; 3]) -> bool,
+    ) -> Step {
+        if !self.thin {
+            return self.step(limit);
+        }
+        let mut w = self.clone();
+        let passed = w.pass(limit, empty);
+        *self = w;
+        match passed {
+            Passed::End => Step::End,
+            Passed::Met => Step::Cell(self.lead),
+            Passed::Widened(a, tau) => {
+                self.widen(a, tau);
+                Step::Cell(self.lead)
+            }
+        }
+    }
+
+    /// The parameter of the crossing that opens the first cell of this thin
+    /// walk (one of blocks, from [`BeamWalk::settled_block`]) that
+    /// `occupied` (per cell, x fastest) says holds something, or that the
+    /// beam enters while it still spans the last (the walk would turn wide
+    /// over two cells there; rare, since the beam is thin). `None` when the
+    /// walk ends first. The walk is consumed: it lives in registers
+    /// ([`BeamWalk::pass`]) and is never written back.
     #[inline]
     pub(crate) fn pass_thin(mut self, limit: T, occupied: &[bool]) -> Option<T> {
         debug_assert!(self.thin);
+        match self.pass(limit, |b, _| !occupied[b]) {
+            Passed::End => None,
+            Passed::Met | Passed::Widened(..) => Some(self.t_event),
+        }
+    }
+
+    /// [`BeamWalk::step`]'s thin steps, repeated while they open cells that
+    /// `empty` says hold nothing and the walk stays thin; the walk is left
+    /// thin, after the step it stopped at (not yet widened, when that step
+    /// turns it wide).
+    ///
+    /// The axis of each step is dispatched to code of its own
+    /// ([`BeamWalk::thin_step_on`]): every index into the walk is then a
+    /// constant, so a walk that its caller keeps locally (a copy) lives in
+    /// registers, where `step` reloads from memory what its last step stored
+    /// (indexed by the axis). The cell's index moves by a stride instead of
+    /// being computed from its coordinates.
+    #[inline(always)]
+    fn pass(&mut self, limit: T, mut empty: impl FnMut(usize, [u32; 3]) -> bool) -> Passed<T> {
         let [nx, ny] = [0, 1].map(|a| self.bounds[a].len() - 1);
         let stride = |a: usize, along: usize| along.wrapping_mul(self.step[a] as isize as usize);
         let moves = [stride(0, 1), stride(1, nx), stride(2, nx * ny)];
@@ -252,9 +307,10 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             let (a, t) = if t2 < t01 { (2, t2) } else { (a01, t01) };
             // As in `step`: +∞ ends the walk even when `limit` is +∞.
             if !(t <= limit) || t == T::INFINITY {
-                return None;
+                return Passed::End;
             }
-            let thin = match a {
+            self.t_event = t;
+            let tau = match a {
                 0 => {
                     index = index.wrapping_add(moves[0]);
                     self.thin_step_on::<0>()
@@ -268,25 +324,45 @@ impl<'g, T: Real> BeamWalk<'g, T> {
                     self.thin_step_on::<2>()
                 }
             };
-            if !thin || occupied[index] {
-                return Some(t);
+            self.t_settled = tau;
+            if !(tau <= self.next_lead()) {
+                return Passed::Widened(a, tau);
+            }
+            if !empty(index, self.lead) {
+                return Passed::Met;
             }
         }
     }
 
-    /// The thin step along axis `A`, whose crossing is the next event:
-    /// moves the lead and returns whether the walk stays thin (the trail
-    /// left behind catches up before the next event); the caller stops
-    /// stepping when it does not.
+    /// The lead's move of [`BeamWalk::step`]'s thin step along axis `A`,
+    /// whose crossing is the next event; returns `tau`, when the trail left
+    /// behind crosses after it.
     #[inline(always)]
-    fn thin_step_on<const A: usize>(&mut self) -> bool {
+    fn thin_step_on<const A: usize>(&mut self) -> T {
         let old_lead = self.lead[A];
         self.lead[A] = old_lead.wrapping_add_signed(self.step[A]);
         self.t_lead[A] = self.lead_time(A);
-        let tau = self.time(A, self.exit_offset(A, old_lead) - self.lead_off[A]);
+        self.time(A, self.exit_offset(A, old_lead) - self.lead_off[A])
+    }
+
+    /// `next_event` without its NaN handling: crossings are never NaN.
+    #[inline(always)]
+    fn next_lead(&self) -> T {
         let [t0, t1, t2] = self.t_lead;
         let t01 = if t1 < t0 { t1 } else { t0 };
-        tau <= if t2 < t01 { t2 } else { t01 }
+        if t2 < t01 { t2 } else { t01 }
+    }
+
+    /// Turns a thin walk wide after a lead step along `a` whose trail
+    /// crosses at `tau`, after the next event: the trail lags a cell behind
+    /// on `a`.
+    #[inline(never)]
+    fn widen(&mut self, a: usize, tau: T) {
+        self.trail = self.lead;
+        self.trail[a] = self.lead[a].wrapping_add_signed(-self.step[a]);
+        self.t_trail = [T::INFINITY; 3];
+        self.t_trail[a] = tau;
+        self.thin = false;
     }
 
     /// The parameter of the next lead crossing (`+∞` when the beam's front has
@@ -367,17 +443,9 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         // and catch this trail up at the first event at or after its
         // crossing: now if that is the next event, else the walk turns wide.
         let tau = self.time(a, self.exit_offset(a, old_lead) - self.lead_off[a]);
-        // `next_event` without its NaN handling: crossings are never NaN.
-        let [t0, t1, t2] = self.t_lead;
-        let t01 = if t1 < t0 { t1 } else { t0 };
-        let next = if t2 < t01 { t2 } else { t01 };
         self.t_settled = tau;
-        if !(tau <= next) {
-            self.trail = self.lead;
-            self.trail[a] = old_lead;
-            self.t_trail = [T::INFINITY; 3];
-            self.t_trail[a] = tau;
-            self.thin = false;
+        if !(tau <= self.next_lead()) {
+            self.widen(a, tau);
         }
         Step::Cell(self.lead)
     }
@@ -740,6 +808,73 @@ mod tests {
             };
             let got = w.settled_block(&blocks, 2, t).pass_thin(limit, &full);
             proptest::prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+        }
+
+        /// Stepping past empty cells is stepping until a cell that holds
+        /// something, or a wide walk: the same steps, at the same crossings
+        /// bit for bit, to the end; with rays through the cells' edges,
+        /// where the walk turns wide.
+        #[test]
+        fn stepping_past_empty_cells_is_stepping_until_one_is_not(
+            o in proptest::array::uniform3(-1.0..9.0f64),
+            d in proptest::array::uniform3(-1.0..1.0f64),
+            full in proptest::collection::vec(proptest::bool::weighted(0.1), 8 * 7 * 9),
+            limit_share in 0.0..1.5f64,
+            edge in proptest::option::of((0usize..3, 1usize..7, 1usize..7, 0.0..1.0f64)),
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(8.0, 7.0, 9.0)),
+                [8, 7, 9],
+            );
+            let o = match edge {
+                Some((free, i, j, along)) => {
+                    let [u, v] = [(free + 1) % 3, (free + 2) % 3];
+                    let mut p = [0.0; 3];
+                    p[u] = g.boundaries(u)[i];
+                    p[v] = g.boundaries(v)[j];
+                    p[free] = along * g.bounds().max[free];
+                    [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
+                }
+                None => o,
+            };
+            let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
+            let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
+            let limit = if limit_share > 1.0 {
+                f64::INFINITY
+            } else {
+                tr.t_start + limit_share * (tr.t_end - tr.t_start)
+            };
+            let (mut general, _) = BeamWalk::start(&g, &tr, tr.t_start);
+            let mut passing = general.clone();
+            let empty = |c: [u32; 3]| !full[g.linear_index(c)];
+            for _ in 0..1000 {
+                let want = if general.thin {
+                    loop {
+                        match general.step(limit) {
+                            Step::Cell(c) if general.thin && empty(c) => {}
+                            other => break other,
+                        }
+                    }
+                } else {
+                    general.step(limit)
+                };
+                let got = passing.step_past_empty(limit, |c, at| {
+                    assert_eq!(c, g.linear_index(at));
+                    !full[c]
+                });
+                proptest::prop_assert_eq!(got, want);
+                if want == Step::End {
+                    return Ok(());
+                }
+                proptest::prop_assert_eq!(
+                    passing.event_time().to_bits(),
+                    general.event_time().to_bits()
+                );
+                proptest::prop_assert_eq!(passing.thin, general.thin);
+                let settled = |w: &BeamWalk<'_, f64>| w.settled().map(|(c, t)| (c, t.to_bits()));
+                proptest::prop_assert_eq!(settled(&passing), settled(&general));
+            }
+            proptest::prop_assert!(false, "the walk did not end");
         }
 
         /// The beam's cells located once ([`BeamWalk::beam_cells`]) are

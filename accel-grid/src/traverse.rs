@@ -42,25 +42,40 @@ impl<T: Real> GridPart<T> {
         }
     }
 
-    /// The walk's next cells up to `limit`: past the empty blocks ahead when
-    /// the cells it opened last held nothing and the grid keeps blocks
-    /// ([`crate::blocks`]), else its next step.
+    /// The walk's next cells up to `limit`. When the cells it opened last
+    /// held nothing: past the empty blocks ahead if the grid keeps blocks
+    /// ([`crate::blocks`]) and the walk has settled in an empty one, else
+    /// past the empty cells ahead up to one in an empty block
+    /// ([`BeamWalk::step_past_empty`], each counted as visited). Else its
+    /// next step.
     #[inline(always)]
-    fn next_step<'g, const BLOCKS: bool>(
+    fn next_step<'g, const BITS: bool, const BLOCKS: bool, C: CostCounter>(
         &'g self,
         walk: &mut BeamWalk<'g, T>,
         tr: &TraversalRay<T>,
         limit: T,
         opened_empty: bool,
+        counter: &mut C,
     ) -> Step {
+        if !opened_empty {
+            return walk.step(limit);
+        }
         if BLOCKS
-            && opened_empty
             && let Some(blocks) = &self.blocks
             && let Some(step) = blocks.pass_empty(walk, &self.geometry, tr, limit)
         {
             return step;
         }
-        walk.step(limit)
+        walk.step_past_empty(limit, |c, at| {
+            // A cell of an empty block is opened, not passed: the blocks
+            // pass over the rest of it at the next step.
+            let passed = self.cell::<BITS>(c).1.is_empty()
+                && !(BLOCKS && self.blocks.as_ref().is_some_and(|b| b.is_empty_around(at)));
+            if passed {
+                counter.node();
+            }
+            passed
+        })
     }
 
     /// [`GridPart::nearest_with`], reading occupancy bits and skipping
@@ -122,9 +137,7 @@ impl<T: Real> GridPart<T> {
             let mut empty = true;
             self.for_step::<BITS>(cells, |(start, refs)| {
                 counter.node();
-                if BLOCKS {
-                    empty &= refs.is_empty();
-                }
+                empty &= refs.is_empty();
                 for_each_candidate(self.packed.as_ref(), start, refs, &tr.prepared, |p| {
                     if !mailbox.seen(p) {
                         counter.prim();
@@ -140,7 +153,7 @@ impl<T: Real> GridPart<T> {
                 Some(b) => tr.t_end.min(b.t + tr.t_tol),
                 None => tr.t_end,
             };
-            cells = self.next_step::<BLOCKS>(&mut walk, tr, limit, empty);
+            cells = self.next_step::<BITS, BLOCKS, C>(&mut walk, tr, limit, empty, counter);
             if cells == Step::End {
                 return best;
             }
@@ -169,9 +182,7 @@ impl<T: Real> GridPart<T> {
             let mut empty = true;
             self.for_step::<BITS>(cells, |(start, refs)| {
                 counter.node();
-                if BLOCKS {
-                    empty &= refs.is_empty();
-                }
+                empty &= refs.is_empty();
                 if found {
                     return;
                 }
@@ -188,7 +199,7 @@ impl<T: Real> GridPart<T> {
             if found {
                 return true;
             }
-            cells = self.next_step::<BLOCKS>(&mut walk, tr, tr.t_end, empty);
+            cells = self.next_step::<BITS, BLOCKS, C>(&mut walk, tr, tr.t_end, empty, counter);
             if cells == Step::End {
                 return false;
             }

@@ -23,7 +23,8 @@ use accel_core::{
     QueryError, Ray, Real, TRAVERSAL_ROUNDINGS, TraversalRay, nearer, region_matches,
     region_search_box, validate_region,
 };
-use accel_grid::dda::BeamWalk;
+use accel_grid::cells::CellBox;
+use accel_grid::dda::{BeamWalk, Step};
 use core::borrow::Borrow;
 
 /// The beam for walking `node`: the parent's, narrowed to the rounding of
@@ -102,6 +103,49 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C> Query<'q, 'a
     }
 }
 
+impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter> Query<'_, '_, T, P, S, C> {
+    /// Whether cell `c` (a linear index in `node`'s grid) holds nothing:
+    /// no primitive and no child grid.
+    #[inline(always)]
+    fn is_empty(&self, node: &Node<T>, c: usize) -> bool {
+        let offsets = self.tree.cells.offsets();
+        let i = node.cell_index(c);
+        offsets[i] == offsets[i + 1]
+    }
+
+    /// The walk's next cells up to `limit`: after cells that held nothing,
+    /// past the empty ones ahead ([`BeamWalk::step_past_empty`], counted as
+    /// visited), else its next step. `None` ends the walk.
+    #[inline(always)]
+    fn next_cells(
+        &mut self,
+        walk: &mut BeamWalk<'_, T>,
+        node: &Node<T>,
+        limit: T,
+        opened_empty: bool,
+    ) -> Option<CellBox> {
+        let step = if opened_empty {
+            let offsets = self.tree.cells.offsets();
+            let counter = &mut *self.counter;
+            walk.step_past_empty(limit, |c, _| {
+                let i = node.cell_index(c);
+                let empty = offsets[i] == offsets[i + 1];
+                if empty {
+                    counter.node();
+                }
+                empty
+            })
+        } else {
+            walk.step(limit)
+        };
+        match step {
+            Step::End => None,
+            Step::Cell(c) => Some(CellBox::single(c)),
+            Step::Cells(b) => Some(b),
+        }
+    }
+}
+
 /// The state of one nearest-hit query.
 struct Nearest<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S, C> {
     q: Query<'q, 'a, T, P, S, C>,
@@ -137,9 +181,13 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
         let first = walk.restart(&node.geometry, from);
         let mut cells = first;
         loop {
-            node.geometry
-                .for_each_cell_index(&cells, |c| self.cell(node, tr, c));
-            match walk.advance(self.limit(tr)) {
+            let mut empty = true;
+            node.geometry.for_each_cell_index(&cells, |c| {
+                empty &= self.q.is_empty(node, c);
+                self.cell(node, tr, c);
+            });
+            let limit = self.limit(tr);
+            match self.q.next_cells(&mut walk, node, limit, empty) {
                 Some(next) => cells = next,
                 None => return,
             }
@@ -203,13 +251,15 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
         let first = walk.restart(&node.geometry, from);
         let mut cells = first;
         loop {
-            let mut found = false;
-            node.geometry
-                .for_each_cell_index(&cells, |c| found = found || self.cell(node, tr, c));
+            let (mut found, mut empty) = (false, true);
+            node.geometry.for_each_cell_index(&cells, |c| {
+                empty &= self.q.is_empty(node, c);
+                found = found || self.cell(node, tr, c);
+            });
             if found {
                 return true;
             }
-            match walk.advance(tr.t_end) {
+            match self.q.next_cells(&mut walk, node, tr.t_end, empty) {
                 Some(next) => cells = next,
                 None => return false,
             }
