@@ -14,6 +14,7 @@
 
 use accel_core::Aabb;
 use accel_grid::cells::GridGeometry;
+use accel_grid::csr::CellLists;
 
 /// The bit that marks a cell entry as a link to a child grid.
 pub(crate) const CHILD: u32 = 1 << 31;
@@ -42,6 +43,15 @@ impl<T> Node<T> {
     #[inline]
     pub(crate) fn cell_index(&self, cell: usize) -> usize {
         self.base as usize + cell
+    }
+
+    /// Whether the cell with linear index `cell` holds nothing in the shared
+    /// cell lists `cells`: no primitive and no child grid.
+    #[inline(always)]
+    pub(crate) fn holds_nothing(&self, cells: &CellLists, cell: usize) -> bool {
+        // Two offsets, without slicing the references.
+        let (offsets, i) = (cells.offsets(), self.cell_index(cell));
+        offsets[i] == offsets[i + 1]
     }
 }
 

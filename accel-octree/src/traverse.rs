@@ -104,15 +104,6 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C> Query<'q, 'a
 }
 
 impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter> Query<'_, '_, T, P, S, C> {
-    /// Whether cell `c` (a linear index in `node`'s grid) holds nothing:
-    /// no primitive and no child grid.
-    #[inline(always)]
-    fn is_empty(&self, node: &Node<T>, c: usize) -> bool {
-        let offsets = self.tree.cells.offsets();
-        let i = node.cell_index(c);
-        offsets[i] == offsets[i + 1]
-    }
-
     /// The walk's next cells up to `limit`: after cells that held nothing,
     /// past the empty ones ahead ([`BeamWalk::step_past_empty`], counted as
     /// visited), else its next step. `None` ends the walk.
@@ -125,11 +116,9 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter> Query<'
         opened_empty: bool,
     ) -> Option<CellBox> {
         let step = if opened_empty {
-            let offsets = self.tree.cells.offsets();
-            let counter = &mut *self.counter;
+            let (cells, counter) = (&self.tree.cells, &mut *self.counter);
             walk.step_past_empty(limit, |c, _| {
-                let i = node.cell_index(c);
-                let empty = offsets[i] == offsets[i + 1];
+                let empty = node.holds_nothing(cells, c);
                 if empty {
                     counter.node();
                 }
@@ -183,7 +172,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
         loop {
             let mut empty = true;
             node.geometry.for_each_cell_index(&cells, |c| {
-                empty &= self.q.is_empty(node, c);
+                empty &= node.holds_nothing(&self.q.tree.cells, c);
                 self.cell(node, tr, c);
             });
             let limit = self.limit(tr);
@@ -253,7 +242,7 @@ impl<'q, 'a, T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>, C: CostCounter>
         loop {
             let (mut found, mut empty) = (false, true);
             node.geometry.for_each_cell_index(&cells, |c| {
-                empty &= self.q.is_empty(node, c);
+                empty &= node.holds_nothing(&self.q.tree.cells, c);
                 found = found || self.cell(node, tr, c);
             });
             if found {
