@@ -236,12 +236,12 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         walk
     }
 
-    /// As [`BeamWalk::step`], passing over the cells that `empty` (by
-    /// linear index in the walk's grid, x fastest, and by coordinates) says
-    /// to pass over (they hold nothing) while
-    /// the walk stays thin: returns the first step that opens a cell that
-    /// holds something, or turns the walk wide ([`Step::Cell`] of its lead,
-    /// as `step` returns it), or the end. A wide walk takes one general step.
+    /// As [`BeamWalk::step`], passing over the cells that `empty` (given
+    /// each cell's linear index in the walk's grid, x fastest, and its
+    /// coordinates) says to pass over, while the walk stays thin: returns
+    /// the first step that opens a cell not passed over, or turns the walk
+    /// wide ([`Step::Cell`] of its lead, as `step` returns it), or the end.
+    /// A wide walk takes one general step.
     ///
     /// The thin steps are those of [`BeamWalk::pass`], on a copy of the
     /// walk in registers, written back once.
@@ -695,6 +695,23 @@ mod tests {
         }
     }
 
+    /// An origin from which direction `d` passes through an inner edge of
+    /// `g`'s cells: the line where the boundaries `i` and `j` of the two
+    /// axes other than `free` meet, at the share `along` of `free`'s extent
+    /// (which starts at 0).
+    fn aimed_at_edge(
+        g: &GridGeometry<f64>,
+        (free, i, j, along): (usize, usize, usize, f64),
+        d: [f64; 3],
+    ) -> [f64; 3] {
+        let [u, v] = [(free + 1) % 3, (free + 2) % 3];
+        let mut p = [0.0; 3];
+        p[u] = g.boundaries(u)[i];
+        p[v] = g.boundaries(v)[j];
+        p[free] = along * g.bounds().max[free];
+        [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
+    }
+
     proptest::proptest! {
         /// A walk started again in place at `t` is the walk started at `t`:
         /// the same first cells and the same steps after; a walk not yet
@@ -774,20 +791,9 @@ mod tests {
             );
             let blocks = g.coarsened(2);
             proptest::prop_assert_eq!(blocks.cell_count(), full.len());
-            // Often through an inner edge of the blocks (two coordinates
-            // on their boundaries), where the beam comes to span two blocks
-            // and the pass stops.
-            let o = match edge {
-                Some((free, i, j, along)) => {
-                    let [u, v] = [(free + 1) % 3, (free + 2) % 3];
-                    let mut p = [0.0; 3];
-                    p[u] = blocks.boundaries(u)[i];
-                    p[v] = blocks.boundaries(v)[j];
-                    p[free] = along * g.bounds().max[free];
-                    [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
-                }
-                None => o,
-            };
+            // Often through an inner edge of the blocks, where the beam
+            // comes to span two blocks and the pass stops.
+            let o = edge.map_or(o, |e| aimed_at_edge(&blocks, e, d));
             let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
             let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
             let (w, _) = BeamWalk::start(&g, &tr, tr.t_start);
@@ -826,17 +832,7 @@ mod tests {
                 Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(8.0, 7.0, 9.0)),
                 [8, 7, 9],
             );
-            let o = match edge {
-                Some((free, i, j, along)) => {
-                    let [u, v] = [(free + 1) % 3, (free + 2) % 3];
-                    let mut p = [0.0; 3];
-                    p[u] = g.boundaries(u)[i];
-                    p[v] = g.boundaries(v)[j];
-                    p[free] = along * g.bounds().max[free];
-                    [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
-                }
-                None => o,
-            };
+            let o = edge.map_or(o, |e| aimed_at_edge(&g, e, d));
             let Ok(ray) = Ray::new(o.into(), d.into()) else { return Ok(()) };
             let Some(tr) = TraversalRay::new(&ray, g.bounds()) else { return Ok(()) };
             let limit = if limit_share > 1.0 {
