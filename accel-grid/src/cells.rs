@@ -263,14 +263,7 @@ impl<T: Real> GridGeometry<T> {
     pub fn axis_cell_relative(&self, axis: usize, origin: T, rel: T) -> u32 {
         let b = &self.boundaries[axis];
         let last = self.resolution[axis] - 1;
-        let guess = ((origin - b[0]) + rel) * self.scale[axis];
-        // Truncation is the floor of a positive guess, without the libm call
-        // that `floor` becomes on baseline x86-64.
-        let mut i = if guess > T::ZERO {
-            (guess.to_i64_saturating().min(last as i64)) as u32
-        } else {
-            0
-        };
+        let mut i = self.guess_cell(axis, origin, rel);
         // The guess is off by at most a cell or two near boundaries; fix it
         // against the stored values.
         while i > 0 && rel < b[i as usize] - origin {
@@ -280,6 +273,24 @@ impl<T: Real> GridGeometry<T> {
             i += 1;
         }
         i
+    }
+
+    /// The first guess of [`GridGeometry::axis_cell_relative`]: the cell
+    /// that `origin + rel` would lie in if the boundaries were exactly
+    /// evenly spaced, clamped to the grid. Off by a cell or two near
+    /// boundaries; callers check it against the stored boundaries.
+    #[inline(always)]
+    #[must_use]
+    pub fn guess_cell(&self, axis: usize, origin: T, rel: T) -> u32 {
+        let last = self.resolution[axis] - 1;
+        let guess = ((origin - self.boundaries[axis][0]) + rel) * self.scale[axis];
+        // Truncation is the floor of a positive guess, without the libm call
+        // that `floor` becomes on baseline x86-64.
+        if guess > T::ZERO {
+            (guess.to_i64_saturating().min(i64::from(last))) as u32
+        } else {
+            0
+        }
     }
 
     /// The cell along `axis` holding coordinate `x` (clamped).

@@ -48,6 +48,17 @@ enum Passed<T> {
     Widened(usize, T),
 }
 
+/// What [`BeamWalk::restart`] learns of one axis from its first guess.
+#[derive(Clone, Copy)]
+struct ThinProbe<T> {
+    /// The guessed cell.
+    cell: u32,
+    /// The lead's crossing out of it (`+∞` where there is none).
+    t_lead: T,
+    /// Whether the beam lies in that cell alone along the axis.
+    alone: bool,
+}
+
 /// A beam walking the cells of one grid front to back.
 ///
 /// While the beam is *thin* (its trail equals its lead on every axis, so its
@@ -146,11 +157,73 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// Starts this walk again, in place, at parameter `t` (as
     /// [`BeamWalk::start`], on the same grid `geom` and ray), and returns the
     /// cells the beam touches there; places a [`BeamWalk::unplaced`] walk.
+    ///
+    /// The common case, a beam that lies in one cell on every axis there
+    /// (the first guess of each axis's cell right, the beam clear of its
+    /// boundaries), is settled from one guess and two boundaries per axis,
+    /// with no branch per axis; any other case takes
+    /// [`BeamWalk::restart_each_axis`]. Both give the same walk, bit for
+    /// bit.
     #[inline]
     pub fn restart(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
         debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
         self.t_event = t;
         self.t_settled = t;
+        let [x, y, z] = [0, 1, 2].map(|a| self.thin_probe(geom, a, t));
+        if x.alone & y.alone & z.alone {
+            let cell = [x.cell, y.cell, z.cell];
+            self.lead = cell;
+            self.trail = cell;
+            self.t_lead = [x.t_lead, y.t_lead, z.t_lead];
+            self.t_trail = [T::INFINITY; 3];
+            self.thin = true;
+            return CellBox::single(cell);
+        }
+        self.restart_each_axis(geom, t)
+    }
+
+    /// Whether, at `t`, the beam lies in one cell along `axis`, found from
+    /// `geom`'s first guess alone ([`GridGeometry::guess_cell`]), and that
+    /// cell and its lead crossing if so.
+    ///
+    /// The guess `m` is [`GridGeometry::axis_cell_relative`]'s answer for
+    /// `rel` exactly when `rel` lies at or past boundary `m` (or `m` is the
+    /// first cell) and before boundary `m + 1` (or `m` is the last), and
+    /// [`BeamWalk::beam_cells`] then gives `m` for both edges exactly when
+    /// `rel − delta` and `rel + delta` do too. Those imply the tests on
+    /// `rel` itself, since `rel − delta ≤ rel ≤ rel + delta` after rounding.
+    /// The crossing is [`BeamWalk::lead_time`]'s expression on the boundary
+    /// already read.
+    #[inline(always)]
+    fn thin_probe(&self, geom: &GridGeometry<T>, axis: usize, t: T) -> ThinProbe<T> {
+        let (b, o) = (self.bounds[axis], self.origin[axis]);
+        let rel = self.dir[axis] * t;
+        let m = geom.guess_cell(axis, o, rel) as usize;
+        let last = b.len() - 2;
+        let (low_edge, high_edge) = (b[m] - o, b[m + 1] - o);
+        // Bitwise, not short-circuit: one branch for all three axes.
+        let alone = ((m == 0) | (rel - self.delta >= low_edge))
+            & ((m == last) | (rel + self.delta < high_edge));
+        let up = self.up[axis] as usize;
+        let exit = m + up;
+        let t_lead = if self.step[axis] != 0 && exit > 0 && exit <= last {
+            let edge = if up == 1 { high_edge } else { low_edge };
+            self.time(axis, edge + self.lead_off[axis])
+        } else {
+            T::INFINITY
+        };
+        ThinProbe {
+            cell: m as u32,
+            t_lead,
+            alone,
+        }
+    }
+
+    /// [`BeamWalk::restart`] axis by axis, for any beam: each axis's cells
+    /// located and fixed against the stored boundaries, the walk wide
+    /// where the beam spans more than one cell.
+    #[inline(never)]
+    fn restart_each_axis(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
         let mut cells = CellBox::single([0; 3]);
         for a in 0..3 {
             let rel = self.dir[a] * t;
@@ -712,6 +785,26 @@ mod tests {
         [0, 1, 2].map(|a| p[a] - 3.0 * d[a])
     }
 
+    /// Whether [`BeamWalk::restart`] and [`BeamWalk::restart_each_axis`],
+    /// at the share `at` of the ray's interval in `g`, return the same cells
+    /// and leave the same walk (every field, bit for bit: `Debug` prints
+    /// each float's shortest exact form, `-0` included); true when the ray
+    /// misses `g`.
+    fn restarts_agree<T: Real>(g: &GridGeometry<T>, o: [T; 3], d: [T; 3], at: T) -> bool {
+        let Ok(ray) = Ray::new(o.into(), d.into()) else {
+            return true;
+        };
+        let Some(tr) = TraversalRay::new(&ray, g.bounds()) else {
+            return true;
+        };
+        let t = tr.t_start + at * (tr.t_end - tr.t_start);
+        let (mut guessed, mut each) = (BeamWalk::unplaced(g, &tr), BeamWalk::unplaced(g, &tr));
+        let cells = (guessed.restart(g, t), each.restart_each_axis(g, t));
+        each.t_event = t;
+        each.t_settled = t;
+        cells.0 == cells.1 && format!("{guessed:?}") == format!("{each:?}")
+    }
+
     proptest::proptest! {
         /// A walk started again in place at `t` is the walk started at `t`:
         /// the same first cells and the same steps after; a walk not yet
@@ -739,6 +832,37 @@ mod tests {
             // Not yet placed, a walk opens nothing.
             let mut idle = BeamWalk::unplaced(&g, &tr);
             proptest::prop_assert_eq!(idle.step(f64::INFINITY), Step::End);
+        }
+
+        /// A restart from the first guesses is the restart axis by axis:
+        /// the same cells and the same walk, bit for bit, in both
+        /// precisions, for rays through cells' edges too, where the beam
+        /// spans two cells and the guesses give way.
+        #[test]
+        fn restarting_from_guesses_is_restarting_each_axis(
+            o in proptest::array::uniform3(-1.0..9.0f64),
+            d in proptest::array::uniform3(-1.0..1.0f64),
+            zero in proptest::option::of(0usize..3),
+            at in 0.0..1.0f64,
+            edge in proptest::option::of((0usize..3, 1usize..13, 1usize..13, 0.0..1.0f64)),
+        ) {
+            let g = GridGeometry::new(
+                Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(8.0, 7.0, 9.0)),
+                [16, 13, 18],
+            );
+            let mut d = d;
+            if let Some(a) = zero {
+                d[a] = 0.0;
+            }
+            let o = edge.map_or(o, |e| aimed_at_edge(&g, e, d));
+            let f32_grid = GridGeometry::new(g.bounds().cast::<f32>(), [16, 13, 18]);
+            proptest::prop_assert!(restarts_agree(&g, o, d, at));
+            proptest::prop_assert!(restarts_agree(
+                &f32_grid,
+                o.map(|x| x as f32),
+                d.map(|x| x as f32),
+                at as f32
+            ));
         }
 
         /// The block walk made from a settled cell walk is the walk over the
