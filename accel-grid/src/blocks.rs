@@ -174,7 +174,8 @@ impl<T: Real> Blocks<T> {
     /// and restarts the cell walk before the next block that holds
     /// something, returning what it opens first ([`Step::End`] when nothing
     /// is left up to `limit`). `None` when the walk should simply step on.
-    #[inline]
+    /// Always inlined, so that the step it returns stays in registers.
+    #[inline(always)]
     pub fn pass_empty(
         &self,
         walk: &mut BeamWalk<'_, T>,
@@ -186,26 +187,30 @@ impl<T: Real> Blocks<T> {
         if !self.is_empty_around(cell) {
             return None;
         }
-        Some(self.pass_from(walk, geometry, tr, from, limit))
+        // Restarted here, not in `pass_from`: a `Step` returned from a call
+        // went through memory in 4-byte stores that the caller read back in
+        // 16-byte loads straddling them (no store forwarding).
+        Some(match self.pass_from(walk, tr, from, limit) {
+            Some(restart) => Step::Cells(walk.restart(geometry, restart)),
+            None => Step::End,
+        })
     }
 
     /// [`Blocks::pass_empty`] from parameter `from`, at which the beam lies
-    /// in the walk's lead cell alone, in an empty block.
+    /// in the walk's lead cell alone, in an empty block: the parameter at
+    /// which to restart the cell walk, `None` when nothing is left up to
+    /// `limit`.
     #[inline(never)]
     fn pass_from(
         &self,
-        walk: &mut BeamWalk<'_, T>,
-        geometry: &GridGeometry<T>,
+        walk: &BeamWalk<'_, T>,
         tr: &TraversalRay<T>,
         from: T,
         limit: T,
-    ) -> Step {
+    ) -> Option<T> {
         let blocks = walk.settled_block(&self.geometry, self.shift, from);
-        let Some(t) = blocks.pass_thin(limit, &self.occupied) else {
-            return Step::End;
-        };
-        let restart = (t - T::gamma(SETTLED_MARGIN) * t.abs()).max(tr.t_start);
-        Step::Cells(walk.restart(geometry, restart))
+        let t = blocks.pass_thin(limit, &self.occupied)?;
+        Some((t - T::gamma(SETTLED_MARGIN) * t.abs()).max(tr.t_start))
     }
 }
 

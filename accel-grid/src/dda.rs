@@ -48,6 +48,15 @@ enum Passed<T> {
     Widened(usize, T),
 }
 
+/// Where [`BeamWalk::place`] put a walk.
+#[derive(Clone, Copy)]
+enum Placed {
+    /// In this one cell.
+    One([u32; 3]),
+    /// Across several cells ([`BeamWalk::spread_cells`]).
+    Spread,
+}
+
 /// What [`BeamWalk::restart`] learns of one axis from its first guess.
 #[derive(Clone, Copy)]
 struct ThinProbe<T> {
@@ -164,8 +173,24 @@ impl<'g, T: Real> BeamWalk<'g, T> {
     /// with no branch per axis; any other case takes
     /// [`BeamWalk::restart_each_axis`]. Both give the same walk, bit for
     /// bit.
-    #[inline]
+    ///
+    /// The cells come back from the out-of-line part ([`BeamWalk::place`])
+    /// in registers: a [`CellBox`] returned from a call went through memory
+    /// in six 4-byte stores that the caller read back in 8-byte loads, each
+    /// straddling two of them (no store forwarding).
+    #[inline(always)]
     pub fn restart(&mut self, geom: &GridGeometry<T>, t: T) -> CellBox {
+        match self.place(geom, t) {
+            Placed::One(cell) => CellBox::single(cell),
+            Placed::Spread => self.spread_cells(),
+        }
+    }
+
+    /// [`BeamWalk::restart`] but for the cells it returns: the one cell
+    /// the beam lies in, or that it spans several (those between its trail
+    /// and lead, [`BeamWalk::spread_cells`]).
+    #[inline]
+    fn place(&mut self, geom: &GridGeometry<T>, t: T) -> Placed {
         debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
         self.t_event = t;
         self.t_settled = t;
@@ -177,9 +202,21 @@ impl<'g, T: Real> BeamWalk<'g, T> {
             self.t_lead = [x.t_lead, y.t_lead, z.t_lead];
             self.t_trail = [T::INFINITY; 3];
             self.thin = true;
-            return CellBox::single(cell);
+            return Placed::One(cell);
         }
-        self.restart_each_axis(geom, t)
+        self.restart_each_axis(geom, t);
+        Placed::Spread
+    }
+
+    /// The cells a walk just placed spans: per axis, from the lower to the
+    /// higher of its trail and lead (the trail is the low end when stepping
+    /// up or parallel, the high end when stepping down).
+    #[cold]
+    fn spread_cells(&self) -> CellBox {
+        CellBox {
+            lo: [0, 1, 2].map(|a| self.trail[a].min(self.lead[a])),
+            hi: [0, 1, 2].map(|a| self.trail[a].max(self.lead[a])),
+        }
     }
 
     /// Whether, at `t`, the beam lies in one cell along `axis`, found from
@@ -790,14 +827,22 @@ mod tests {
     /// and leave the same walk (every field, bit for bit: `Debug` prints
     /// each float's shortest exact form, `-0` included); true when the ray
     /// misses `g`.
-    fn restarts_agree<T: Real>(g: &GridGeometry<T>, o: [T; 3], d: [T; 3], at: T) -> bool {
+    /// `at` of `None` restarts at parameter 3, where a ray from
+    /// [`aimed_at_edge`] meets the edge (the beam spans the cells around
+    /// it), or at the start when 3 lies outside the interval.
+    fn restarts_agree<T: Real>(g: &GridGeometry<T>, o: [T; 3], d: [T; 3], at: Option<T>) -> bool {
         let Ok(ray) = Ray::new(o.into(), d.into()) else {
             return true;
         };
         let Some(tr) = TraversalRay::new(&ray, g.bounds()) else {
             return true;
         };
-        let t = tr.t_start + at * (tr.t_end - tr.t_start);
+        let edge = T::from_f64(3.0);
+        let t = match at {
+            Some(at) => tr.t_start + at * (tr.t_end - tr.t_start),
+            None if tr.t_start <= edge && edge <= tr.t_end => edge,
+            None => tr.t_start,
+        };
         let (mut guessed, mut each) = (BeamWalk::unplaced(g, &tr), BeamWalk::unplaced(g, &tr));
         let cells = (guessed.restart(g, t), each.restart_each_axis(g, t));
         each.t_event = t;
@@ -836,14 +881,15 @@ mod tests {
 
         /// A restart from the first guesses is the restart axis by axis:
         /// the same cells and the same walk, bit for bit, in both
-        /// precisions, for rays through cells' edges too, where the beam
-        /// spans two cells and the guesses give way.
+        /// precisions, for rays through cells' edges too, restarted where
+        /// they meet the edge: the beam spans the cells around it there,
+        /// and the guesses give way.
         #[test]
         fn restarting_from_guesses_is_restarting_each_axis(
             o in proptest::array::uniform3(-1.0..9.0f64),
             d in proptest::array::uniform3(-1.0..1.0f64),
             zero in proptest::option::of(0usize..3),
-            at in 0.0..1.0f64,
+            at in proptest::option::of(0.0..1.0f64),
             edge in proptest::option::of((0usize..3, 1usize..13, 1usize..13, 0.0..1.0f64)),
         ) {
             let g = GridGeometry::new(
@@ -861,7 +907,7 @@ mod tests {
                 &f32_grid,
                 o.map(|x| x as f32),
                 d.map(|x| x as f32),
-                at as f32
+                at.map(|x| x as f32)
             ));
         }
 
