@@ -314,18 +314,23 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         }
         // The ray is prepared (its shear takes three divisions) only once
         // a part's box is met: a ray that misses every part prepares nothing.
+        // Each beam is borrowed where it was built, as above.
         let roots = &self.nodes[..self.parts];
-        let Some((first, tr)) = self.first_part_met(ray) else {
-            return Ok(None);
-        };
-        let mut q = Nearest::new(self, tr.prepared, counter);
-        q.walk(&roots[first], &tr, tr.t_start);
-        for root in &roots[first + 1..] {
-            if let Some(tr) = &self.part_beam(ray, root) {
-                q.walk(root, tr, tr.t_start);
+        for (first, root) in roots.iter().enumerate() {
+            let entered = self.part_beam(ray, root);
+            let Some(tr) = &entered else {
+                continue;
+            };
+            let mut q = Nearest::new(self, tr.prepared, counter);
+            q.walk(root, tr, tr.t_start);
+            for root in &roots[first + 1..] {
+                if let Some(tr) = &self.part_beam(ray, root) {
+                    q.walk(root, tr, tr.t_start);
+                }
             }
+            return Ok(q.best);
         }
-        Ok(q.best)
+        Ok(None)
     }
 
     /// Whether anything is hit, counting the work in `counter`, part by part
@@ -350,16 +355,20 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         }
         // Prepared only once a part's box is met, as in `nearest`.
         let roots = &self.nodes[..self.parts];
-        let Some((first, tr)) = self.first_part_met(ray) else {
-            return Ok(false);
-        };
-        let mut q = Any::new(self, tr.prepared, counter);
-        Ok(q.walk(&roots[first], &tr, tr.t_start)
-            || roots[first + 1..].iter().any(|root| {
-                self.part_beam(ray, root)
-                    .as_ref()
-                    .is_some_and(|tr| q.walk(root, tr, tr.t_start))
-            }))
+        for (first, root) in roots.iter().enumerate() {
+            let entered = self.part_beam(ray, root);
+            let Some(tr) = &entered else {
+                continue;
+            };
+            let mut q = Any::new(self, tr.prepared, counter);
+            return Ok(q.walk(root, tr, tr.t_start)
+                || roots[first + 1..].iter().any(|root| {
+                    self.part_beam(ray, root)
+                        .as_ref()
+                        .is_some_and(|tr| q.walk(root, tr, tr.t_start))
+                }));
+        }
+        Ok(false)
     }
 
     /// The nearest hit of a tree of one part, on the beam `tr` through its
@@ -420,16 +429,6 @@ impl<T: Real, P: PrimitiveSet<T> + ?Sized, S: Borrow<P>> Octree<'_, T, P, S> {
         let found = q.descend(child, tr);
         core::mem::swap(&mut q.q.mailbox, mailbox);
         found
-    }
-
-    /// The first part whose box the ray's beam meets, by its index among
-    /// the roots, and that beam.
-    #[inline]
-    fn first_part_met(&self, ray: &Ray<T>) -> Option<(usize, TraversalRay<T>)> {
-        self.nodes[..self.parts]
-            .iter()
-            .enumerate()
-            .find_map(|(i, root)| self.part_beam(ray, root).map(|tr| (i, tr)))
     }
 
     /// The beam of `ray` through the part whose root is `root`, `None` when
