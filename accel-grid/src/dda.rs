@@ -186,9 +186,9 @@ impl<'g, T: Real> BeamWalk<'g, T> {
         }
     }
 
-    /// [`BeamWalk::restart`] but for the cells it returns: the one cell
-    /// the beam lies in, or that it spans several (those between its trail
-    /// and lead, [`BeamWalk::spread_cells`]).
+    /// [`BeamWalk::restart`], returning the one cell the beam lies in, or
+    /// [`Placed::Spread`] when it spans several (those between the walk's
+    /// trail and lead, [`BeamWalk::spread_cells`]).
     #[inline]
     fn place(&mut self, geom: &GridGeometry<T>, t: T) -> Placed {
         debug_assert!(core::ptr::eq(self.bounds[0], geom.boundaries(0)));
@@ -827,6 +827,7 @@ mod tests {
     /// and leave the same walk (every field, bit for bit: `Debug` prints
     /// each float's shortest exact form, `-0` included); true when the ray
     /// misses `g`.
+    ///
     /// `at` of `None` restarts at parameter 3, where a ray from
     /// [`aimed_at_edge`] meets the edge (the beam spans the cells around
     /// it), or at the start when 3 lies outside the interval.
